@@ -1,0 +1,17 @@
+//! cachert — a renderer for pbrt-v3 scene files built around cache-based rendering, where *where the
+//! caches go* is a switchable strategy.
+//!
+//! The pipeline, one module per stage (see `DESIGN.md` in the shared documents):
+//!
+//! | stage | module | what it does |
+//! |---|---|---|
+//! | 1 | [`parse`] | scene text → directives with file:line:col |
+//!
+//! Errors from user input are [`error::Error`]s with locations; nothing reachable from a scene file or a flag
+//! panics.
+#![deny(missing_docs)]
+
+pub mod error;
+pub mod parse;
+
+pub use error::{Error, Result, SourceLoc, Warning, Warnings};
