@@ -6,12 +6,20 @@
 //! | stage | module | what it does |
 //! |---|---|---|
 //! | 1 | [`parse`] | scene text → directives with file:line:col |
+//! | 2 | [`scene`] | directives → camera, film, shapes, instances, BVH |
+//! | — | [`image`] | f32 RGB images; EXR, PFM and PNG in and out |
+//! | — | [`metrics`] | RMSE, relMSE, HDR-FLIP |
+//! | — | [`cli`] | the subcommands of the `cachert` binary |
 //!
 //! Errors from user input are [`error::Error`]s with locations; nothing reachable from a scene file or a flag
 //! panics.
 #![deny(missing_docs)]
 
+pub mod cli;
 pub mod error;
+pub mod image;
+pub mod metrics;
 pub mod parse;
+pub mod scene;
 
 pub use error::{Error, Result, SourceLoc, Warning, Warnings};

@@ -1,0 +1,1 @@
+//! `cachert compare`. Being written.

@@ -1,0 +1,3 @@
+//! The subcommands of the `cachert` binary, as library functions so tests can call them.
+
+pub mod compare;

@@ -1,0 +1,1 @@
+//! Error metrics between a test and a reference image. Being written.

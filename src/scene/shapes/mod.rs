@@ -1,0 +1,5 @@
+//! STAGE 2 (scene): shape data. Mesh readers (PLY, OBJ) turn files into [`mesh_data::MeshData`].
+
+pub mod mesh_data;
+pub mod obj;
+pub mod ply;
