@@ -20,6 +20,7 @@ pub mod error;
 pub mod image;
 pub mod metrics;
 pub mod parse;
+pub mod sampling;
 pub mod scene;
 
 pub use error::{Error, Result, SourceLoc, Warning, Warnings};

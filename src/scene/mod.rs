@@ -4,3 +4,10 @@
 //! Depends on `parse` (for directives) and on nothing later in the pipeline.
 
 pub mod shapes;
+pub mod accel;
+pub mod camera;
+pub mod film;
+pub mod filter;
+pub mod ray;
+pub mod sampler;
+pub mod transform;

@@ -1,0 +1,89 @@
+//! Warps from the unit square to disks and hemispheres, with their densities (pbrt-v3's sampling.h
+//! conventions: local z is the normal).
+
+use glam::Vec3A;
+use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+
+/// Shirley–Chiu concentric map from [0,1)² to the unit disk (area-preserving up to a constant).
+#[inline]
+pub fn concentric_disk(u: [f32; 2]) -> [f32; 2] {
+    let a = 2.0 * u[0] - 1.0;
+    let b = 2.0 * u[1] - 1.0;
+    if a == 0.0 && b == 0.0 {
+        return [0.0, 0.0];
+    }
+    let (r, theta) = if a.abs() > b.abs() {
+        (a, FRAC_PI_4 * (b / a))
+    } else {
+        (b, FRAC_PI_2 - FRAC_PI_4 * (a / b))
+    };
+    [r * theta.cos(), r * theta.sin()]
+}
+
+/// Cosine-weighted direction on the hemisphere around +z (Malley's method), density cosθ/π.
+#[inline]
+pub fn cosine_hemisphere(u: [f32; 2]) -> Vec3A {
+    let [x, y] = concentric_disk(u);
+    let z = (1.0 - x * x - y * y).max(0.0).sqrt();
+    Vec3A::new(x, y, z)
+}
+
+/// The density of [`cosine_hemisphere`] for a direction with cosine `cos_theta` to +z.
+#[inline]
+pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
+    cos_theta * (1.0 / PI)
+}
+
+/// Uniform direction on the hemisphere around +z, density 1/(2π).
+#[inline]
+pub fn uniform_hemisphere(u: [f32; 2]) -> Vec3A {
+    let z = u[0];
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * u[1];
+    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// The density of [`uniform_hemisphere`].
+pub const UNIFORM_HEMISPHERE_PDF: f32 = 1.0 / (2.0 * PI);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(n: usize) -> impl Iterator<Item = [f32; 2]> {
+        (0..n * n).map(move |i| [((i % n) as f32 + 0.5) / n as f32, ((i / n) as f32 + 0.5) / n as f32])
+    }
+
+    #[test]
+    fn cosine_hemisphere_is_unit_upper_and_integrates_cosine() {
+        // E[cos θ / pdf] over the cosine density equals ∫cos dω = π.
+        let n = 64;
+        let mut sum = 0.0f64;
+        for u in grid(n) {
+            let w = cosine_hemisphere(u);
+            assert!((w.length() - 1.0).abs() < 1e-5 && w.z >= 0.0);
+            if w.z > 0.0 {
+                sum += (w.z / cosine_hemisphere_pdf(w.z)) as f64;
+            }
+        }
+        assert!((sum / (n * n) as f64 - std::f64::consts::PI).abs() < 1e-4);
+        // The mean of cos θ under the cosine density is 2/3.
+        let mean: f64 = grid(n).map(|u| cosine_hemisphere(u).z as f64).sum::<f64>() / (n * n) as f64;
+        assert!((mean - 2.0 / 3.0).abs() < 2e-3, "{mean}");
+    }
+
+    #[test]
+    fn uniform_hemisphere_has_mean_cosine_one_half() {
+        let n = 64;
+        let mean: f64 = grid(n).map(|u| uniform_hemisphere(u).z as f64).sum::<f64>() / (n * n) as f64;
+        assert!((mean - 0.5).abs() < 1e-3);
+    }
+
+    #[test]
+    fn concentric_disk_stays_in_the_disk() {
+        for u in grid(33) {
+            let [x, y] = concentric_disk(u);
+            assert!(x * x + y * y <= 1.0 + 1e-6);
+        }
+    }
+}

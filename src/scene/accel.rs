@@ -1,0 +1,312 @@
+//! STAGE 2 (scene): the ray-tracing acceleration structure — the only module that knows obvhs.
+//!
+//! Two levels, as pbrt-v3 builds them: one compressed wide BVH (CWBVH, obvhs) over the world's triangles,
+//! analytic shapes and object instances, and one BVH per object definition, shared by all its instances
+//! (never flattened). Two queries: [`Accel::intersect`] (nearest hit) and [`Accel::occluded`] (any hit
+//! before t_max). Primitive data is stored in BVH leaf order so a leaf's triangles sit next to each other.
+
+use std::time::Duration;
+
+use glam::{Affine3A, DVec3, Vec3A};
+use obvhs::aabb::Aabb;
+use obvhs::cwbvh::CwBvh;
+use obvhs::cwbvh::builder::build_cwbvh;
+use obvhs::ray::RayHit;
+use obvhs::{Boundable, BvhBuildParams};
+use rayon::prelude::*;
+
+use crate::scene::ray::Ray;
+use crate::scene::shapes::quadric::{Quadric, transform_bounds};
+use crate::scene::shapes::triangle::{self, RayShear};
+
+/// What a BVH leaf entry is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PrimRef {
+    /// Triangle `tri` of mesh `mesh` (an index into the world's or the object's mesh list).
+    Triangle {
+        /// Mesh index.
+        mesh: u32,
+        /// Triangle index within the mesh.
+        tri: u32,
+    },
+    /// An analytic shape (index into [`Accel::quadrics`]).
+    Quadric(u32),
+    /// An object instance (index into the instance list); only in the top level.
+    Instance(u32),
+}
+
+/// A primitive handed to [`Accel::build`]: triangles carry their (world- or object-space) vertices.
+#[derive(Clone, Copy, Debug)]
+pub struct BuildPrim {
+    /// What it is.
+    pub r: PrimRef,
+    /// The triangle's vertices (unused for other kinds).
+    pub verts: [[f32; 3]; 3],
+}
+
+/// An instance of an object definition.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InstanceXf {
+    /// Which object definition.
+    pub object: u32,
+    /// Instance space → world.
+    pub world_from_object: Affine3A,
+    /// World → instance space.
+    pub object_from_world: Affine3A,
+}
+
+/// The nearest hit found by [`Accel::intersect`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// The primitive hit (mesh/triangle indices refer to the instance's object when `instance` is set).
+    pub prim: PrimRef,
+    /// The instance the ray entered, if any.
+    pub instance: Option<u32>,
+    /// Barycentric coordinates (b1, b2) of a triangle hit.
+    pub b: [f32; 2],
+    /// Object-space hit point of an analytic shape.
+    pub quadric_p: DVec3,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Item {
+    verts: [[f32; 3]; 3],
+    r: PrimRef,
+}
+
+struct Boxed(Aabb);
+
+impl Boundable for Boxed {
+    fn aabb(&self) -> Aabb {
+        self.0
+    }
+}
+
+/// One BVH level: the tree plus its primitives in leaf order.
+#[derive(Default)]
+pub struct Level {
+    bvh: Option<CwBvh>,
+    items: Vec<Item>,
+    /// World (or object) space bounds of everything in the level.
+    pub bounds: Option<(Vec3A, Vec3A)>,
+}
+
+impl std::fmt::Debug for Level {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Level").field("primitives", &self.items.len()).field("bounds", &self.bounds).finish()
+    }
+}
+
+impl Level {
+    fn build(prims: &[BuildPrim], quadrics: &[Quadric], instance_box: &dyn Fn(u32) -> Option<(Vec3A, Vec3A)>) -> Level {
+        let boxes: Vec<Option<(Vec3A, Vec3A)>> = prims
+            .iter()
+            .map(|p| match p.r {
+                PrimRef::Triangle { .. } => {
+                    let [a, b, c] = p.verts.map(Vec3A::from);
+                    Some((a.min(b).min(c), a.max(b).max(c)))
+                }
+                PrimRef::Quadric(q) => Some(quadrics[q as usize].world_bounds()),
+                PrimRef::Instance(i) => instance_box(i),
+            })
+            .collect();
+        let kept: Vec<(usize, (Vec3A, Vec3A))> =
+            boxes.iter().enumerate().filter_map(|(i, b)| b.filter(|(lo, hi)| lo.is_finite() && hi.is_finite()).map(|b| (i, b))).collect();
+        if kept.is_empty() {
+            return Level::default();
+        }
+        let aabbs: Vec<Boxed> = kept.iter().map(|(_, (lo, hi))| Boxed(Aabb::new(*lo, *hi))).collect();
+        let bounds = kept.iter().fold((Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)), |(lo, hi), (_, (a, b))| (lo.min(*a), hi.max(*b)));
+        let bvh = build_cwbvh(&aabbs, BvhBuildParams::medium_build(), &mut Duration::default());
+        let items = bvh
+            .primitive_indices
+            .iter()
+            .map(|&k| {
+                let p = &prims[kept[k as usize].0];
+                Item { verts: p.verts, r: p.r }
+            })
+            .collect();
+        Level { bvh: Some(bvh), items, bounds: Some(bounds) }
+    }
+
+    /// Number of primitives in this level.
+    pub fn len(&self) -> usize {
+        self.items.len()
+    }
+
+    /// Whether the level has no primitives.
+    pub fn is_empty(&self) -> bool {
+        self.items.is_empty()
+    }
+}
+
+/// The two-level acceleration structure of a scene.
+#[derive(Debug, Default)]
+pub struct Accel {
+    top: Level,
+    objects: Vec<Level>,
+    instances: Vec<InstanceXf>,
+    /// Every analytic shape, world-level and object-level alike.
+    pub quadrics: Vec<Quadric>,
+}
+
+impl Accel {
+    /// Builds one BVH per object definition (in parallel; each build is deterministic) and the top BVH
+    /// over `top` (world triangles, analytic shapes and instances).
+    pub fn build(top: Vec<BuildPrim>, objects: Vec<Vec<BuildPrim>>, instances: Vec<InstanceXf>, quadrics: Vec<Quadric>) -> Accel {
+        let no_instances = |_| None;
+        let objects: Vec<Level> = objects.par_iter().map(|prims| Level::build(prims, &quadrics, &no_instances)).collect();
+        let instance_box = |i: u32| {
+            let inst = instances.get(i as usize)?;
+            let (lo, hi) = objects.get(inst.object as usize)?.bounds?;
+            Some(transform_bounds(&inst.world_from_object, lo, hi))
+        };
+        let top = Level::build(&top, &quadrics, &instance_box);
+        Accel { top, objects, instances, quadrics }
+    }
+
+    /// World bounds of everything, if anything.
+    pub fn bounds(&self) -> Option<(Vec3A, Vec3A)> {
+        self.top.bounds
+    }
+
+    /// Primitive counts: (top-level entries, object BVHs, instances).
+    pub fn counts(&self) -> (usize, usize, usize) {
+        (self.top.len(), self.objects.len(), self.instances.len())
+    }
+
+    /// The instance transform of a hit.
+    pub fn instance(&self, i: u32) -> &InstanceXf {
+        &self.instances[i as usize]
+    }
+
+    /// The nearest hit along `ray` with t in (0, ray.t_max).
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.nearest(&self.top, ray)
+    }
+
+    /// Whether anything blocks `ray` for t in (0, ray.t_max).
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        self.any(&self.top, ray)
+    }
+
+    fn nearest(&self, level: &Level, ray: &Ray) -> Option<Hit> {
+        let bvh = level.bvh.as_ref()?;
+        let shear = RayShear::new(ray.o, ray.d);
+        let mut best: Option<Hit> = None;
+        let mut rh = RayHit::none();
+        let oray = obvhs::ray::Ray::new(ray.o, ray.d, 0.0, ray.t_max);
+        bvh.ray_traverse(oray, &mut rh, |r, slot| {
+            let it = &level.items[slot];
+            let found = match it.r {
+                PrimRef::Triangle { .. } => triangle::intersect(&shear, &it.verts, r.tmax).map(|(t, b1, b2)| Hit {
+                    t,
+                    prim: it.r,
+                    instance: None,
+                    b: [b1, b2],
+                    quadric_p: DVec3::ZERO,
+                }),
+                PrimRef::Quadric(q) => self.quadrics[q as usize].intersect(&Ray { t_max: r.tmax, ..*ray }).map(|h| Hit {
+                    t: h.t,
+                    prim: it.r,
+                    instance: None,
+                    b: [0.0; 2],
+                    quadric_p: h.p,
+                }),
+                PrimRef::Instance(i) => {
+                    let inst = &self.instances[i as usize];
+                    let local = Ray {
+                        o: inst.object_from_world.transform_point3a(ray.o),
+                        d: inst.object_from_world.transform_vector3a(ray.d),
+                        t_max: r.tmax,
+                    };
+                    self.nearest(&self.objects[inst.object as usize], &local).map(|h| Hit { instance: Some(i), ..h })
+                }
+            };
+            match found {
+                Some(h) if h.t < r.tmax => {
+                    best = Some(h);
+                    h.t
+                }
+                _ => f32::INFINITY,
+            }
+        });
+        best
+    }
+
+    fn any(&self, level: &Level, ray: &Ray) -> bool {
+        let Some(bvh) = level.bvh.as_ref() else { return false };
+        let shear = RayShear::new(ray.o, ray.d);
+        let oray = obvhs::ray::Ray::new(ray.o, ray.d, 0.0, ray.t_max);
+        let t_max = ray.t_max;
+        !bvh.ray_traverse_miss(oray, |_, slot| {
+            let it = &level.items[slot];
+            let blocked = match it.r {
+                PrimRef::Triangle { .. } => triangle::intersect(&shear, &it.verts, t_max).is_some(),
+                PrimRef::Quadric(q) => self.quadrics[q as usize].intersect(ray).is_some(),
+                PrimRef::Instance(i) => {
+                    let inst = &self.instances[i as usize];
+                    let local = Ray {
+                        o: inst.object_from_world.transform_point3a(ray.o),
+                        d: inst.object_from_world.transform_vector3a(ray.d),
+                        t_max,
+                    };
+                    self.any(&self.objects[inst.object as usize], &local)
+                }
+            };
+            if blocked { 0.0 } else { f32::INFINITY }
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::shapes::quadric::QuadricKind;
+
+    fn quad(z: f32, mesh: u32) -> Vec<BuildPrim> {
+        let v = [[-1.0, -1.0, z], [1.0, -1.0, z], [1.0, 1.0, z], [-1.0, 1.0, z]];
+        vec![
+            BuildPrim { r: PrimRef::Triangle { mesh, tri: 0 }, verts: [v[0], v[1], v[2]] },
+            BuildPrim { r: PrimRef::Triangle { mesh, tri: 1 }, verts: [v[0], v[2], v[3]] },
+        ]
+    }
+
+    #[test]
+    fn nearest_and_any_hit_over_triangles_shapes_and_instances() {
+        let mut top = quad(5.0, 0);
+        top.extend(quad(3.0, 1));
+        top.push(BuildPrim { r: PrimRef::Quadric(0), verts: [[0.0; 3]; 3] });
+        top.push(BuildPrim { r: PrimRef::Instance(0), verts: [[0.0; 3]; 3] });
+        let sphere = Quadric {
+            kind: QuadricKind::Sphere { radius: 0.5, z_min: -0.5, z_max: 0.5, phi_max: std::f64::consts::TAU },
+            world_from_object: Affine3A::from_translation(glam::Vec3::new(3.0, 0.0, 0.0)),
+            object_from_world: Affine3A::from_translation(glam::Vec3::new(-3.0, 0.0, 0.0)),
+            flip_normal: false,
+        };
+        let m = Affine3A::from_translation(glam::Vec3::new(-3.0, 0.0, 0.0));
+        let inst = InstanceXf { object: 0, world_from_object: m, object_from_world: m.inverse() };
+        let a = Accel::build(top, vec![quad(2.0, 0)], vec![inst], vec![sphere]);
+        let h = a.intersect(&Ray::new(Vec3A::ZERO, Vec3A::Z)).unwrap();
+        assert_eq!((h.t, h.prim, h.instance), (3.0, h.prim, None));
+        assert!(matches!(h.prim, PrimRef::Triangle { mesh: 1, .. }));
+        let h = a.intersect(&Ray::new(Vec3A::new(3.0, 0.0, -2.0), Vec3A::Z)).unwrap();
+        assert!(matches!(h.prim, PrimRef::Quadric(0)) && (h.t - 1.5).abs() < 1e-5);
+        let h = a.intersect(&Ray::new(Vec3A::new(-3.0, 0.0, 0.0), Vec3A::Z)).unwrap();
+        assert_eq!((h.t, h.instance), (2.0, Some(0)));
+        assert!(a.occluded(&Ray::new(Vec3A::ZERO, Vec3A::Z)));
+        assert!(!a.occluded(&Ray { t_max: 2.5, ..Ray::new(Vec3A::ZERO, Vec3A::Z) }));
+        assert!(a.occluded(&Ray { t_max: 2.5, ..Ray::new(Vec3A::new(-3.0, 0.0, 0.0), Vec3A::Z) }));
+        assert!(!a.occluded(&Ray::new(Vec3A::ZERO, -Vec3A::Z)));
+    }
+
+    #[test]
+    fn empty_scenes_hit_nothing() {
+        let a = Accel::build(vec![], vec![], vec![], vec![]);
+        assert!(a.intersect(&Ray::new(Vec3A::ZERO, Vec3A::Z)).is_none());
+        assert!(!a.occluded(&Ray::new(Vec3A::ZERO, Vec3A::Z)));
+        assert!(a.bounds().is_none());
+    }
+}
