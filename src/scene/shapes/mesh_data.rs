@@ -50,7 +50,7 @@ impl MeshData {
                 self.uvs.len()
             ));
         }
-        if self.indices.len() % 3 != 0 {
+        if !self.indices.len().is_multiple_of(3) {
             return Err(format!(
                 "{} vertex indices is not a multiple of 3",
                 self.indices.len()
