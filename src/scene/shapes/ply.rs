@@ -56,27 +56,32 @@ pub fn read_ply(path: &Path, warnings: &mut Warnings) -> Result<MeshData> {
     }
     .map_err(fail)?;
 
+    report_losses(path, &ignored, &mut mesh, warnings);
+    mesh.validate().map_err(fail)?;
+    Ok(mesh)
+}
+
+/// Warns about what was dropped: faces other than triangles and quads (one warning for all of them),
+/// unusable normals (dropped here), and an empty result.
+fn report_losses(path: &Path, ignored: &Ignored, mesh: &mut MeshData, warnings: &mut Warnings) {
     let name = path.display();
     if !ignored.is_empty() {
+        let plural = |n: u64| if n == 1 { "" } else { "s" };
         let counts: Vec<String> = ignored
             .iter()
-            .map(|(k, n)| {
-                format!(
-                    "{n} face{} with {k} vertices",
-                    if *n == 1 { "" } else { "s" }
-                )
-            })
+            .map(|(k, n)| format!("{n} face{} with {k} vertices", plural(*n)))
             .collect();
+        let counts = counts.join(", ");
         warnings.general(format!(
-            "{name}: plymesh: ignored {} (only triangles and quads are supported)",
-            counts.join(", ")
+            "{name}: plymesh: ignored {counts} (only triangles and quads are supported)"
         ));
     }
     let bad = mesh.drop_unusable_normals();
     if bad > 0 {
+        let n = mesh.positions.len();
         warnings.general(format!(
-            "{name}: plymesh: {bad} of {} vertex normals are NaN, infinite or zero; ignoring all normals of this mesh",
-            mesh.positions.len()
+            "{name}: plymesh: {bad} of {n} vertex normals are NaN, infinite or zero; \
+             ignoring all normals of this mesh"
         ));
     }
     if mesh.triangle_count() == 0 {
@@ -84,8 +89,6 @@ pub fn read_ply(path: &Path, warnings: &mut Warnings) -> Result<MeshData> {
             "{name}: plymesh: the file has no triangles, so the shape is empty"
         ));
     }
-    mesh.validate().map_err(fail)?;
-    Ok(mesh)
 }
 
 /// The body encoding named on the `format` line.
