@@ -1,13 +1,144 @@
-//! STAGE 2: directives → [`Scene`]-level objects: graphics state, transforms, camera, film, shapes,
-//! instances and the ray-tracing acceleration structure.
+//! STAGE 2: directives → a [`Scene`]: camera, film, sampler and filter settings, geometry with its BVHs,
+//! materials, textures and lights.
 //!
-//! Depends on `parse` (for directives) and on nothing later in the pipeline.
+//! [`load`] runs stages 1 and 2 for a scene file. Depends on `parse` (for directives) and `sampling`;
+//! nothing here knows about integrators, caches or images.
 
-pub mod shapes;
 pub mod accel;
+mod builder;
 pub mod camera;
 pub mod film;
 pub mod filter;
+pub mod geometry;
+pub mod light;
+pub mod material;
+pub mod mesh;
+pub mod props;
 pub mod ray;
 pub mod sampler;
+pub mod shapes;
+pub mod texture;
 pub mod transform;
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use glam::Vec3A;
+
+use crate::error::{Result, SourceLoc, Warnings};
+use crate::parse::Named;
+
+/// Options that change how a scene is loaded.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// pbrt-v3's `--quick`: film resolution ÷ 4 and one sample per pixel.
+    pub quick: bool,
+}
+
+/// What loading took and produced.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoadStats {
+    /// Seconds spent reading and parsing scene text.
+    pub parse_secs: f64,
+    /// Seconds spent turning directives into geometry (mesh files included), BVH excluded.
+    pub build_secs: f64,
+    /// Seconds spent building BVHs.
+    pub bvh_secs: f64,
+    /// Shape directives turned into geometry.
+    pub shapes: usize,
+    /// Triangles stored (object definitions counted once).
+    pub triangles: usize,
+    /// Object instances.
+    pub instances: usize,
+}
+
+/// A scene ready to render.
+#[derive(Debug)]
+pub struct Scene {
+    /// The top-level scene file.
+    pub source: PathBuf,
+    /// The camera.
+    pub camera: camera::Camera,
+    /// Film settings.
+    pub film: film::FilmSpec,
+    /// Pixel reconstruction filter.
+    pub filter: filter::Filter,
+    /// Sampler settings.
+    pub sampler: sampler::SamplerSpec,
+    /// Everything rays can hit.
+    pub geometry: geometry::Geometry,
+    /// Materials; id 0 is pbrt-v3's default matte.
+    pub materials: Vec<material::Material>,
+    /// Textures.
+    pub textures: Vec<texture::Texture>,
+    /// Non-area light sources.
+    pub lights: Vec<light::Light>,
+    /// Emitting shapes.
+    pub area_lights: Vec<light::AreaLight>,
+}
+
+impl Scene {
+    /// World bounds of all geometry (`None` for an empty world).
+    pub fn bounds(&self) -> Option<(Vec3A, Vec3A)> {
+        self.geometry.accel.bounds()
+    }
+
+    /// Length of the diagonal of the world bounds (0 for an empty world): ALGORITHMS.md's L.
+    pub fn diagonal(&self) -> f32 {
+        self.bounds().map_or(0.0, |(lo, hi)| (hi - lo).length())
+    }
+
+    /// Whether material `id` has no BSDF (pbrt-v3 passes camera rays through such surfaces).
+    pub fn is_null_material(&self, id: u32) -> bool {
+        self.materials.get(id as usize).is_some_and(|m| m.is_null())
+    }
+}
+
+/// A loaded scene with the parts that belong to the render stage and the problems found.
+#[derive(Debug)]
+pub struct LoadedScene {
+    /// The scene.
+    pub scene: Scene,
+    /// The `Integrator` directive, if any (read by the render stage, which knows the integrators).
+    pub integrator: Option<Named>,
+    /// Warnings from parsing and building, in file order.
+    pub warnings: Warnings,
+    /// Timings and counts.
+    pub stats: LoadStats,
+}
+
+/// Parses and builds the scene file at `path`.
+pub fn load(path: &Path, opts: LoadOptions) -> Result<LoadedScene> {
+    let t = Instant::now();
+    let directives = crate::parse::parse_file(path)?;
+    let stats = LoadStats { parse_secs: t.elapsed().as_secs_f64(), ..Default::default() };
+    build(directives, path, opts, stats)
+}
+
+/// Parses and builds scene text given in memory (as if it were the file `name`).
+pub fn load_str(text: &str, name: &Path, opts: LoadOptions) -> Result<LoadedScene> {
+    let t = Instant::now();
+    let directives = crate::parse::parse_str(text, name)?;
+    let stats = LoadStats { parse_secs: t.elapsed().as_secs_f64(), ..Default::default() };
+    build(directives, name, opts, stats)
+}
+
+fn build(directives: Vec<crate::parse::Directive>, path: &Path, opts: LoadOptions, stats: LoadStats) -> Result<LoadedScene> {
+    let t = Instant::now();
+    let mut loaded = builder::SceneBuilder::new(opts).build(directives, path, stats)?;
+    loaded.stats.build_secs = t.elapsed().as_secs_f64() - loaded.stats.bvh_secs;
+    Ok(loaded)
+}
+
+/// Resolves a file name written in a scene file: absolute names as they are, relative names against the
+/// folder of the file that names them (the same rule as `Include`).
+pub fn resolve_path(loc: &SourceLoc, name: &str) -> PathBuf {
+    let p = Path::new(name);
+    if p.is_absolute() {
+        return p.to_path_buf();
+    }
+    match loc.file.parent() {
+        Some(dir) => dir.join(p),
+        None => p.to_path_buf(),
+    }
+}

@@ -1,7 +1,8 @@
-//! STAGE 2 (scene): shape data. Mesh readers (PLY, OBJ) turn files into [`mesh_data::MeshData`].
+//! STAGE 2 (scene): shape data and intersection: mesh readers (PLY, OBJ) produce [`mesh_data::MeshData`];
+//! [`triangle`] and [`quadric`] intersect rays with triangles and analytic shapes.
 
 pub mod mesh_data;
-pub mod quadric;
-pub mod triangle;
 pub mod obj;
 pub mod ply;
+pub mod quadric;
+pub mod triangle;

@@ -1,0 +1,196 @@
+//! STAGE 2 (scene): everything a ray can hit — world meshes, object definitions, analytic shapes and the
+//! acceleration structure over them — and the surface interaction at a hit (position with its error
+//! bound, geometric and shading normals, uv, material), computed as pbrt-v3 does.
+
+use glam::Vec3A;
+
+use crate::scene::accel::{Accel, Hit, PrimRef};
+use crate::scene::mesh::TriangleMesh;
+use crate::scene::ray::{Ray, gamma, offset_ray_origin};
+use crate::scene::shapes::quadric::{QuadricHit, transform_normal, transform_point_with_error};
+
+/// A shape that can carry an area light.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShapeId {
+    /// A world-level triangle mesh.
+    Mesh(u32),
+    /// An analytic shape.
+    Quadric(u32),
+}
+
+/// Material and emission of an analytic shape.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShapeInfo {
+    /// Material id.
+    pub material: u32,
+    /// Area light id.
+    pub area_light: Option<u32>,
+}
+
+/// An object definition (`ObjectBegin … ObjectEnd`): its meshes in definition space.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ObjectDef {
+    /// The object's name.
+    pub name: String,
+    /// Its triangle meshes.
+    pub meshes: Vec<TriangleMesh>,
+}
+
+/// The scene's geometry and its acceleration structure.
+#[derive(Debug, Default)]
+pub struct Geometry {
+    /// World-level meshes.
+    pub meshes: Vec<TriangleMesh>,
+    /// Object definitions (instanced geometry).
+    pub objects: Vec<ObjectDef>,
+    /// Material/emission of each analytic shape (same index as `accel.quadrics`).
+    pub quadric_info: Vec<ShapeInfo>,
+    /// The BVHs.
+    pub accel: Accel,
+}
+
+/// What is known about the surface at a ray hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceInteraction {
+    /// World position.
+    pub p: Vec3A,
+    /// Absolute floating-point error bound of `p`.
+    pub p_error: Vec3A,
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// Unit geometric normal (pbrt-v3's orientation rules: toward the shading normal when there is one).
+    pub ng: Vec3A,
+    /// Unit shading normal, on the same side as `ng`.
+    pub ns: Vec3A,
+    /// ∂p/∂u.
+    pub dpdu: Vec3A,
+    /// Surface (u, v).
+    pub uv: [f32; 2],
+    /// Material id.
+    pub material: u32,
+    /// Area light id, when the surface emits.
+    pub area_light: Option<u32>,
+}
+
+impl SurfaceInteraction {
+    /// A ray leaving the surface in direction `d`, offset past the error bound (pbrt-v3 `SpawnRay`).
+    #[inline]
+    pub fn spawn_ray(&self, d: Vec3A) -> Ray {
+        Ray::new(offset_ray_origin(self.p, self.p_error, self.ng, d), d)
+    }
+}
+
+impl Geometry {
+    /// The nearest surface along `ray`.
+    pub fn intersect(&self, ray: &Ray) -> Option<SurfaceInteraction> {
+        let hit = self.accel.intersect(ray)?;
+        Some(self.interaction(&hit, ray))
+    }
+
+    /// Whether anything blocks `ray` before its t_max.
+    #[inline]
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        self.accel.occluded(ray)
+    }
+
+    /// Total triangles stored (object definitions counted once).
+    pub fn stored_triangles(&self) -> usize {
+        let world: usize = self.meshes.iter().map(|m| m.triangle_count()).sum();
+        let objects: usize = self.objects.iter().flat_map(|o| &o.meshes).map(|m| m.triangle_count()).sum();
+        world + objects
+    }
+
+    fn interaction(&self, hit: &Hit, ray: &Ray) -> SurfaceInteraction {
+        let meshes = match hit.instance {
+            Some(i) => &self.objects[self.accel.instance(i).object as usize].meshes,
+            None => &self.meshes,
+        };
+        let mut si = match hit.prim {
+            PrimRef::Triangle { mesh, tri } => triangle_interaction(&meshes[mesh as usize], tri as usize, hit),
+            PrimRef::Quadric(q) => {
+                let s = self.accel.quadrics[q as usize].surface(&QuadricHit { t: hit.t, p: hit.quadric_p });
+                let info = self.quadric_info[q as usize];
+                SurfaceInteraction {
+                    p: s.p,
+                    p_error: s.p_error,
+                    t: hit.t,
+                    ng: s.n,
+                    ns: s.n,
+                    dpdu: s.dpdu,
+                    uv: s.uv,
+                    material: info.material,
+                    area_light: info.area_light,
+                }
+            }
+            PrimRef::Instance(_) => unreachable!("instances are resolved by the accelerator"),
+        };
+        if let Some(i) = hit.instance {
+            let m = &self.accel.instance(i).world_from_object;
+            let (p, err) = transform_point_with_error(m, si.p, si.p_error);
+            si.p = p;
+            si.p_error = err;
+            si.ng = transform_normal(m, si.ng);
+            si.ns = transform_normal(m, si.ns);
+            si.dpdu = m.transform_vector3a(si.dpdu);
+            si.area_light = None;
+        }
+        si.t = hit.t;
+        debug_assert!(ray.d.is_finite());
+        si
+    }
+}
+
+/// pbrt-v3 `Triangle::Intersect`'s surface data from barycentrics.
+fn triangle_interaction(mesh: &TriangleMesh, tri: usize, hit: &Hit) -> SurfaceInteraction {
+    let [b1, b2] = hit.b;
+    let b0 = 1.0 - b1 - b2;
+    let [p0, p1, p2] = mesh.triangle(tri).map(Vec3A::from);
+    let p = p0 * b0 + p1 * b1 + p2 * b2;
+    let p_abs_sum = (p0 * b0).abs() + (p1 * b1).abs() + (p2 * b2).abs();
+    let idx = &mesh.indices[3 * tri..3 * tri + 3];
+    let uv_of = |k: usize, default: [f32; 2]| if mesh.uvs.is_empty() { default } else { mesh.uvs[idx[k] as usize] };
+    let (uv0, uv1, uv2) = (uv_of(0, [0.0, 0.0]), uv_of(1, [1.0, 0.0]), uv_of(2, [1.0, 1.0]));
+    let (dp02, dp12) = (p0 - p2, p1 - p2);
+    let mut ng = dp02.cross(dp12).normalize_or_zero();
+    if ng == Vec3A::ZERO {
+        ng = Vec3A::Z;
+    }
+    let duv02 = [uv0[0] - uv2[0], uv0[1] - uv2[1]];
+    let duv12 = [uv1[0] - uv2[0], uv1[1] - uv2[1]];
+    let det = duv02[0] * duv12[1] - duv02[1] * duv12[0];
+    let mut dpdu = if det.abs() < 1e-8 { Vec3A::ZERO } else { (dp02 * duv12[1] - dp12 * duv02[1]) / det };
+    if dpdu.cross(ng).length_squared() == 0.0 {
+        dpdu = crate::sampling::Frame::from_normal(ng).s;
+    }
+    let uv = [
+        b0 * uv0[0] + b1 * uv1[0] + b2 * uv2[0],
+        b0 * uv0[1] + b1 * uv1[1] + b2 * uv2[1],
+    ];
+    let mut ns = ng;
+    if mesh.normals.is_empty() {
+        if mesh.flip_normals {
+            ng = -ng;
+        }
+        ns = ng;
+    } else {
+        let n = |k: usize| Vec3A::from(mesh.normals[idx[k] as usize]);
+        let interp = (n(0) * b0 + n(1) * b1 + n(2) * b2).normalize_or_zero();
+        if interp != Vec3A::ZERO {
+            ns = interp;
+        }
+        if ng.dot(ns) < 0.0 {
+            ng = -ng;
+        }
+    }
+    SurfaceInteraction {
+        p,
+        p_error: p_abs_sum * gamma(7),
+        t: hit.t,
+        ng,
+        ns,
+        dpdu,
+        uv,
+        material: mesh.material,
+        area_light: mesh.area_light,
+    }
+}
