@@ -20,6 +20,7 @@ pub mod error;
 pub mod image;
 pub mod metrics;
 pub mod parse;
+pub mod render;
 pub mod sampling;
 pub mod scene;
 

@@ -1,3 +1,35 @@
-//! The subcommands of the `cachert` binary, as library functions so tests can call them.
+//! The subcommands of the `cachert` binary, as library functions returning the text to print, so tests
+//! can call them; `main.rs` only parses flags, prints and maps errors to exit status 2.
 
 pub mod compare;
+pub mod info;
+pub mod render;
+
+/// `cachert` — render pbrt-v3 scenes with cache-based algorithms.
+#[derive(clap::Parser, Debug)]
+#[command(name = "cachert", version, about)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(clap::Subcommand, Debug)]
+pub enum Command {
+    /// Render a pbrt-v3 scene file.
+    Render(render::RenderArgs),
+    /// Show what a scene file loads to.
+    Info(info::InfoArgs),
+    /// Compare an image with a reference (RMSE, relMSE, HDR-FLIP, LDR-FLIP).
+    Compare(compare::CompareArgs),
+}
+
+/// Runs a parsed command line; returns what to print on stdout.
+pub fn run(cli: &Cli) -> crate::Result<String> {
+    match &cli.command {
+        Command::Render(a) => render::run(a),
+        Command::Info(a) => info::run(a),
+        Command::Compare(a) => compare::run(a),
+    }
+}

@@ -31,8 +31,62 @@ fn to_unit(bits: u32) -> f32 {
     ((bits >> 8) as f32 * (1.0 / (1u32 << 24) as f32)).min(super::rng::ONE_MINUS_EPSILON)
 }
 
+/// Element `i` of a pseudo-random permutation of 0..len selected by `key` (Kensler 2013, "Correlated
+/// Multi-Jittered Sampling"): lets each pixel visit its stratified samples in its own order without storing
+/// a permutation.
+pub fn permute(mut i: u32, len: u32, key: u32) -> u32 {
+    if len <= 1 {
+        return 0;
+    }
+    let mut w = len - 1;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    let p = key;
+    loop {
+        i ^= p;
+        i = i.wrapping_mul(0xe170_893d);
+        i ^= p >> 16;
+        i ^= (i & w) >> 4;
+        i ^= p >> 8;
+        i = i.wrapping_mul(0x0929_eb3f);
+        i ^= p >> 23;
+        i ^= (i & w) >> 1;
+        i = i.wrapping_mul(1 | p >> 27);
+        i = i.wrapping_mul(0x6935_fa69);
+        i ^= (i & w) >> 11;
+        i = i.wrapping_mul(0x74dc_b303);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0x9e50_1cc3);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0xc860_a3df);
+        i &= w;
+        i ^= i >> 5;
+        if i < len {
+            break;
+        }
+    }
+    (i.wrapping_add(p)) % len
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn permutations_are_bijections() {
+        for len in [1u32, 2, 7, 16, 100] {
+            for key in [0u32, 1, 0xdead_beef] {
+                let mut seen = vec![false; len as usize];
+                for i in 0..len {
+                    let j = permute(i, len, key) as usize;
+                    assert!(!seen[j]);
+                    seen[j] = true;
+                }
+            }
+        }
+    }
+
     use super::*;
 
     #[test]

@@ -1,0 +1,56 @@
+//! `cachert info`: what a scene file loads to — shapes, triangles, instances, lights, materials, bounds,
+//! warnings and the time each loading stage took.
+
+use std::fmt::Write;
+use std::path::PathBuf;
+
+use crate::error::Result;
+use crate::scene::{LoadOptions, load};
+
+/// Flags of `cachert info`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct InfoArgs {
+    /// The pbrt-v3 scene file.
+    pub scene: PathBuf,
+}
+
+/// Runs `cachert info` and returns the report.
+pub fn run(args: &InfoArgs) -> Result<String> {
+    let l = load(&args.scene, LoadOptions::default())?;
+    let (s, st) = (&l.scene, &l.stats);
+    let mut o = String::new();
+    let _ = writeln!(o, "scene       {}", s.source.display());
+    let _ = writeln!(o, "film        {}x{}  crop {:?}", s.film.resolution[0], s.film.resolution[1], s.film.crop);
+    let _ = writeln!(o, "camera      {:?} at {:?}", s.camera.projection, s.camera.position().to_array());
+    let _ = writeln!(o, "sampler     {} ({} spp)", s.sampler.name, s.sampler.spp);
+    let integrator = l.integrator.as_ref().map_or("path (pbrt-v3 default)", |n| n.name.as_str());
+    let _ = writeln!(o, "integrator  {integrator}");
+    let world_tris: usize = s.geometry.meshes.iter().map(|m| m.triangle_count()).sum();
+    let object_tris: usize = s.geometry.objects.iter().flat_map(|o| &o.meshes).map(|m| m.triangle_count()).sum();
+    let (_, objects, instances) = s.geometry.accel.counts();
+    let instanced: usize = instance_triangles(s);
+    let _ = writeln!(o, "shapes      {} ({} meshes, {} analytic)", st.shapes, s.geometry.meshes.len(), s.geometry.accel.quadrics.len());
+    let _ = writeln!(o, "triangles   {} stored ({world_tris} world, {object_tris} in {objects} object definitions)", st.triangles);
+    let _ = writeln!(o, "instances   {instances} ({instanced} triangles if flattened)");
+    let _ = writeln!(o, "lights      {} + {} area lights", s.lights.len(), s.area_lights.len());
+    let _ = writeln!(o, "materials   {}  textures {}", s.materials.len(), s.textures.len());
+    match s.bounds() {
+        Some((lo, hi)) => {
+            let _ = writeln!(o, "bounds      {:?} .. {:?} (diagonal {:.4})", lo.to_array(), hi.to_array(), s.diagonal());
+        }
+        None => {
+            let _ = writeln!(o, "bounds      empty world");
+        }
+    }
+    let _ = writeln!(o, "time        parse {:.3} s | scene build {:.3} s | BVH build {:.3} s", st.parse_secs, st.build_secs, st.bvh_secs);
+    let _ = writeln!(o, "warnings    {}", l.warnings.len());
+    for w in l.warnings.iter() {
+        let _ = writeln!(o, "  {w}");
+    }
+    Ok(o)
+}
+
+fn instance_triangles(s: &crate::scene::Scene) -> usize {
+    let per_object: Vec<usize> = s.geometry.objects.iter().map(|o| o.meshes.iter().map(|m| m.triangle_count()).sum()).collect();
+    (0..s.geometry.accel.counts().2).map(|i| per_object[s.geometry.accel.instance(i as u32).object as usize]).sum()
+}

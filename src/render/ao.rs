@@ -1,0 +1,105 @@
+//! STAGE 6 (render): pbrt-v3's `ambientocclusion` integrator, exactly: a frame around the geometric normal
+//! faced toward the viewer, `nsamples` cosine-weighted (or uniform) directions per camera sample, unbounded
+//! shadow rays spawned like pbrt-v3's `SpawnRay` (or bounded by pbrt-v4's `maxdistance`), and the estimator
+//! Σ cos θ / (pdf · n), which is π where nothing occludes. Surfaces without a material are passed through.
+//!
+//! This per-pixel integrator is the brute-force reference the cache-based applications are measured against.
+
+use glam::Vec3A;
+
+use crate::error::{Error, Result};
+use crate::parse::ParamList;
+use crate::sampling::Frame;
+use crate::sampling::warp::{UNIFORM_HEMISPHERE_PDF, cosine_hemisphere, cosine_hemisphere_pdf, uniform_hemisphere};
+use crate::scene::Scene;
+use crate::scene::ray::Ray;
+use crate::scene::sampler::SamplerSpec;
+
+use super::samples::PixelSamples;
+use super::{PixelIntegrator, RayCounters};
+
+/// Settings of the `ambientocclusion` integrator.
+///
+/// | parameter | type | default | meaning |
+/// |---|---|---|---|
+/// | `nsamples` | integer | 64 | occlusion rays per camera sample (rounded as the sampler rounds arrays) |
+/// | `cossample` | bool | true | cosine-weighted directions (else uniform over the hemisphere) |
+/// | `maxdistance` | float | ∞ | shadow-ray length (pbrt-v4's parameter) |
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AmbientOcclusion {
+    /// Occlusion rays per camera sample.
+    pub n_samples: u32,
+    /// Cosine-weighted sampling.
+    pub cos_sample: bool,
+    /// Shadow-ray length.
+    pub max_distance: f32,
+}
+
+/// Largest `nsamples` accepted.
+pub const MAX_AO_SAMPLES: i64 = 1 << 20;
+
+/// Most surfaces without a material a camera ray passes through before it gives up.
+const MAX_PASS_THROUGH: usize = 1024;
+
+impl AmbientOcclusion {
+    /// Reads the integrator's parameters; `quick` sets nsamples to 1 as pbrt-v3's `--quick` does.
+    pub fn from_params(p: &ParamList, sampler: &SamplerSpec, quick: bool) -> Result<Self> {
+        let n = p.int_or("nsamples", 64)?;
+        if !(1..=MAX_AO_SAMPLES).contains(&n) {
+            let loc = p.loc_of("nsamples").map(|l| l.to_string() + ": ").unwrap_or_default();
+            return Err(Error::usage(format!("{loc}ambientocclusion: \"nsamples\" must be between 1 and {MAX_AO_SAMPLES}, got {n}")));
+        }
+        let max_distance = p.float_or("maxdistance", f64::INFINITY)? as f32;
+        if !(max_distance > 0.0) {
+            let loc = p.loc_of("maxdistance").map(|l| l.to_string() + ": ").unwrap_or_default();
+            return Err(Error::usage(format!("{loc}ambientocclusion: \"maxdistance\" must be positive, got {max_distance}")));
+        }
+        let n = if quick { 1 } else { sampler.round_count(n as u32) };
+        Ok(AmbientOcclusion { n_samples: n, cos_sample: p.bool_or("cossample", true)?, max_distance })
+    }
+
+    /// AO at a surface point seen along `wo_dir` (the incoming ray direction), with `u` one 2-D sample per
+    /// direction. Returns Σ cos θ / (pdf · n).
+    pub fn occlusion(&self, scene: &Scene, si: &crate::scene::geometry::SurfaceInteraction, ray_dir: Vec3A, u: &[[f32; 2]], counters: &mut RayCounters) -> f32 {
+        let n = if si.ng.dot(-ray_dir) < 0.0 { -si.ng } else { si.ng };
+        let frame = Frame::from_normal(n);
+        let inv_n = 1.0 / u.len() as f32;
+        let mut l = 0.0;
+        for &ui in u {
+            let (wl, pdf) = if self.cos_sample {
+                let w = cosine_hemisphere(ui);
+                (w, cosine_hemisphere_pdf(w.z))
+            } else {
+                (uniform_hemisphere(ui), UNIFORM_HEMISPHERE_PDF)
+            };
+            if pdf <= 0.0 {
+                continue;
+            }
+            let mut r = si.spawn_ray(frame.to_world(wl));
+            r.t_max = self.max_distance;
+            counters.shadow += 1;
+            if !scene.geometry.occluded(&r) {
+                l += wl.z / pdf * inv_n;
+            }
+        }
+        l
+    }
+}
+
+impl PixelIntegrator for AmbientOcclusion {
+    fn li(&self, scene: &Scene, mut ray: Ray, s: &mut PixelSamples, scratch: &mut Vec<[f32; 2]>, c: &mut RayCounters) -> [f32; 3] {
+        for _ in 0..MAX_PASS_THROUGH {
+            c.camera += 1;
+            let Some(si) = scene.geometry.intersect(&ray) else { return [0.0; 3] };
+            if scene.is_null_material(si.material) {
+                ray = si.spawn_ray(ray.d);
+                continue;
+            }
+            scratch.resize(self.n_samples as usize, [0.0; 2]);
+            s.array2d(scratch);
+            let l = self.occlusion(scene, &si, ray.d, scratch, c);
+            return [l; 3];
+        }
+        [0.0; 3]
+    }
+}

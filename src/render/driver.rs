@@ -1,0 +1,98 @@
+//! STAGE 6 (render): the pixel loop. The sample bounds are cut into 16×16 tiles rendered in parallel; each
+//! tile reconstructs into its own film tile and the tiles are merged in tile order.
+
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+
+use crate::image::Image;
+use crate::scene::Scene;
+use crate::scene::film::PixelBounds;
+use crate::scene::sampler::SamplerSpec;
+
+use super::film::{Film, FilmTile};
+use super::samples::PixelSamples;
+use super::{PixelIntegrator, RayCounters};
+
+const TILE: i32 = 16;
+
+/// Renders `scene` with `integrator`, `sampler.spp` samples per pixel; returns the image, the rays traced
+/// and the wall time. Identical output for any thread count.
+pub fn render_image(scene: &Scene, sampler: &SamplerSpec, integrator: &dyn PixelIntegrator, seed: u64, progress: bool) -> (Image, RayCounters, f64) {
+    let start = Instant::now();
+    let image_px = scene.film.cropped_bounds();
+    let sample_px = scene.film.sample_bounds(scene.filter.radius);
+    let tiles = tiles(&sample_px);
+    let bar = progress_bar(progress, tiles.len() as u64);
+    let results: Vec<(FilmTile, RayCounters)> = tiles
+        .par_iter()
+        .map(|t| {
+            let r = render_tile(scene, sampler, integrator, seed, t, &image_px);
+            bar.inc(1);
+            r
+        })
+        .collect();
+    bar.finish_and_clear();
+    let mut film = Film::new(image_px);
+    let mut rays = RayCounters::default();
+    for (tile, c) in &results {
+        film.merge(tile);
+        rays.add(c);
+    }
+    (film.to_image(scene.film.scale), rays, start.elapsed().as_secs_f64())
+}
+
+fn tiles(b: &PixelBounds) -> Vec<PixelBounds> {
+    let mut out = Vec::new();
+    let mut y = b.min[1];
+    while y < b.max[1] {
+        let mut x = b.min[0];
+        while x < b.max[0] {
+            out.push(PixelBounds { min: [x, y], max: [(x + TILE).min(b.max[0]), (y + TILE).min(b.max[1])] });
+            x += TILE;
+        }
+        y += TILE;
+    }
+    out
+}
+
+fn render_tile(scene: &Scene, sampler: &SamplerSpec, integrator: &dyn PixelIntegrator, seed: u64, t: &PixelBounds, image: &PixelBounds) -> (FilmTile, RayCounters) {
+    let mut tile = FilmTile::new(*t, &scene.filter, image);
+    let mut samples = PixelSamples::new(sampler, seed);
+    let mut scratch = Vec::new();
+    let mut counters = RayCounters::default();
+    let max_lum = scene.film.max_sample_luminance;
+    for y in t.min[1]..t.max[1] {
+        for x in t.min[0]..t.max[0] {
+            for i in 0..sampler.spp {
+                samples.start([x, y], i);
+                let u = samples.get2d();
+                let p_film = [x as f32 + u[0], y as f32 + u[1]];
+                let ray = scene.camera.generate_ray(p_film, samples.get2d());
+                let mut l = integrator.li(scene, ray, &mut samples, &mut scratch, &mut counters);
+                if !l.iter().all(|v| v.is_finite()) {
+                    l = [0.0; 3];
+                }
+                let y_lum = 0.212671 * l[0] + 0.715160 * l[1] + 0.072169 * l[2];
+                if y_lum > max_lum {
+                    let s = max_lum / y_lum;
+                    l = l.map(|v| v * s);
+                }
+                tile.add(p_film, l, &scene.filter);
+            }
+        }
+    }
+    (tile, counters)
+}
+
+fn progress_bar(show: bool, n: u64) -> ProgressBar {
+    if !show {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(n);
+    if let Ok(style) = ProgressStyle::with_template("{spinner} rendering [{bar:40}] {percent}% {elapsed_precise} (eta {eta})") {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar
+}

@@ -1,0 +1,128 @@
+//! STAGE 6: rendering — the pixel loop (tiles in parallel, samples keyed by pixel and index, film
+//! reconstruction) and the per-pixel integrators, chosen by name from one registry.
+//!
+//! Depends on `scene` (what to render), `sampling` and `image`; the scene never depends on this module.
+
+pub mod ao;
+mod driver;
+pub mod film;
+pub mod samples;
+
+pub use driver::render_image;
+
+use crate::error::{Error, Result, Warnings};
+use crate::image::Image;
+use crate::parse::{Named, ParamList};
+use crate::scene::Scene;
+use crate::scene::ray::Ray;
+
+use samples::PixelSamples;
+
+/// Rays traced, by kind.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayCounters {
+    /// Nearest-hit rays (camera rays and their continuations).
+    pub camera: u64,
+    /// Any-hit (shadow/occlusion) rays.
+    pub shadow: u64,
+}
+
+impl RayCounters {
+    /// All rays.
+    pub fn total(&self) -> u64 {
+        self.camera + self.shadow
+    }
+
+    fn add(&mut self, o: &RayCounters) {
+        self.camera += o.camera;
+        self.shadow += o.shadow;
+    }
+}
+
+/// An integrator that estimates the radiance along one camera ray.
+pub trait PixelIntegrator: Sync {
+    /// Radiance along `ray`, drawing sample values from `s`; `scratch` is reusable per-thread storage.
+    fn li(&self, scene: &Scene, ray: Ray, s: &mut PixelSamples, scratch: &mut Vec<[f32; 2]>, counters: &mut RayCounters) -> [f32; 3];
+}
+
+/// How to render, beyond what the scene file says.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct RenderSettings {
+    /// Seed of every random stream.
+    pub seed: u64,
+    /// Samples per pixel instead of the sampler's.
+    pub spp: Option<u32>,
+    /// Worker threads (default: all cores).
+    pub threads: Option<usize>,
+    /// Show a progress bar.
+    pub progress: bool,
+    /// pbrt-v3's `--quick` (integrator sample counts to 1).
+    pub quick: bool,
+    /// Integrator name instead of the scene's.
+    pub integrator: Option<String>,
+}
+
+/// What a render produced.
+#[derive(Clone, Debug)]
+pub struct RenderOutput {
+    /// The cropped image.
+    pub image: Image,
+    /// Rays traced.
+    pub rays: RayCounters,
+    /// Wall seconds of the pixel loop.
+    pub render_secs: f64,
+    /// Samples per pixel used.
+    pub spp: u32,
+    /// The integrator that ran.
+    pub integrator: String,
+}
+
+/// The integrators cachert implements, by scene-file name.
+pub const INTEGRATORS: [&str; 1] = ["ambientocclusion"];
+
+/// Builds the integrator named by the scene (or by `settings.integrator`) and renders.
+pub fn render(scene: &Scene, integrator: Option<&Named>, settings: &RenderSettings, warnings: &mut Warnings) -> Result<RenderOutput> {
+    let empty = ParamList::default();
+    let scene_name = integrator.map_or("path", |n| n.name.as_str());
+    let name = settings.integrator.as_deref().unwrap_or(scene_name);
+    // Parameters written for another integrator do not apply to an override.
+    let params = match integrator {
+        Some(n) if n.name == name => &n.params,
+        _ => &empty,
+    };
+    let mut sampler = scene.sampler.clone();
+    if let Some(spp) = settings.spp {
+        if spp == 0 {
+            return Err(Error::usage("--spp must be at least 1"));
+        }
+        sampler.spp = spp;
+    }
+    let pixel: Box<dyn PixelIntegrator> = match name {
+        "ambientocclusion" => Box::new(ao::AmbientOcclusion::from_params(params, &sampler, settings.quick)?),
+        other => {
+            return Err(Error::usage(format!(
+                "integrator \"{other}\" is not implemented by cachert (available: {}); choose one with --integrator",
+                INTEGRATORS.join(", ")
+            )));
+        }
+    };
+    if let Some(n) = integrator.filter(|n| n.name == name) {
+        for p in n.params.unused() {
+            if p.name != "pixelbounds" {
+                warnings.at(&p.loc, format!("Integrator: unused parameter \"{} {}\"", p.ty.word(), p.name));
+            }
+        }
+    }
+    let run = || render_image(scene, &sampler, pixel.as_ref(), settings.seed, settings.progress);
+    let (image, rays, render_secs) = match settings.threads {
+        Some(n) => {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(n.max(1))
+                .build()
+                .map_err(|e| Error::usage(format!("cannot start {n} threads: {e}")))?;
+            pool.install(run)
+        }
+        None => run(),
+    };
+    Ok(RenderOutput { image, rays, render_secs, spp: sampler.spp, integrator: name.to_string() })
+}

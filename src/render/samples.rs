@@ -1,0 +1,102 @@
+//! STAGE 6 (render): the sample values of one camera sample — film position, lens position and 2-D arrays
+//! for integrators — keyed by (seed, pixel, sample index), never by thread, so images are identical for any
+//! thread count.
+//!
+//! `random` gives independent uniform numbers, as pbrt-v3's random sampler. Every other pbrt-v3 sampler
+//! maps to stratified points: each dimension pair of a pixel's samples is a scrambled (0,2)-sequence visited
+//! in a pixel- and dimension-specific order, and each array is a scrambled (0,2)-net (the same guarantees
+//! pbrt-v3's `02sequence` sampler gives).
+
+use crate::sampling::rng::{Rng, hash3, mix64};
+use crate::sampling::sequence::{permute, sobol02};
+use crate::scene::sampler::{SamplerKind, SamplerSpec};
+
+/// A stream of sample values for one (pixel, sample index).
+#[derive(Clone, Debug)]
+pub struct PixelSamples {
+    kind: SamplerKind,
+    seed: u64,
+    spp: u32,
+    pixel_key: u64,
+    index: u32,
+    dim: u64,
+    rng: Rng,
+}
+
+/// Stage tag of camera-sample streams in random keys.
+const STAGE_CAMERA: u64 = 0x63616d;
+
+impl PixelSamples {
+    /// A stream for `spec`'s sampler with `seed` (call [`PixelSamples::start`] before use).
+    pub fn new(spec: &SamplerSpec, seed: u64) -> Self {
+        PixelSamples { kind: spec.kind, seed, spp: spec.spp.max(1), pixel_key: 0, index: 0, dim: 0, rng: Rng::new(0) }
+    }
+
+    /// Positions the stream at sample `index` of pixel (x, y).
+    pub fn start(&mut self, pixel: [i32; 2], index: u32) {
+        self.pixel_key = ((pixel[0] as u32 as u64) << 32) | pixel[1] as u32 as u64;
+        self.index = index;
+        self.dim = 0;
+        self.rng = Rng::new(hash3(self.seed ^ STAGE_CAMERA, self.pixel_key, index as u64));
+    }
+
+    fn dim_key(&mut self) -> u64 {
+        self.dim += 1;
+        hash3(self.seed, self.pixel_key, self.dim)
+    }
+
+    /// The next two dimensions: stratified across the pixel's samples (or uniform for `random`).
+    pub fn get2d(&mut self) -> [f32; 2] {
+        match self.kind {
+            SamplerKind::Random => self.rng.uniform2(),
+            SamplerKind::Stratified => {
+                let k = self.dim_key();
+                let i = permute(self.index, self.spp, k as u32);
+                sobol02(i, [(k >> 32) as u32, mix64(k) as u32])
+            }
+        }
+    }
+
+    /// Fills `out` with the next 2-D array of this sample (e.g. ambient-occlusion directions).
+    pub fn array2d(&mut self, out: &mut [[f32; 2]]) {
+        match self.kind {
+            SamplerKind::Random => out.iter_mut().for_each(|u| *u = self.rng.uniform2()),
+            SamplerKind::Stratified => {
+                let k = mix64(self.dim_key() ^ ((self.index as u64) << 17));
+                let s = [(k >> 32) as u32, k as u32];
+                out.iter_mut().enumerate().for_each(|(j, u)| *u = sobol02(j as u32, s));
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(kind: SamplerKind, spp: u32) -> SamplerSpec {
+        SamplerSpec { name: String::new(), kind, spp, pow2_arrays: false }
+    }
+
+    #[test]
+    fn same_key_same_values_and_film_samples_are_stratified() {
+        let s = spec(SamplerKind::Stratified, 16);
+        let mut a = PixelSamples::new(&s, 3);
+        let mut b = PixelSamples::new(&s, 3);
+        let mut cells = [false; 16];
+        for i in 0..16 {
+            a.start([5, -2], i);
+            b.start([5, -2], i);
+            let (pa, pb) = (a.get2d(), b.get2d());
+            assert_eq!(pa, pb);
+            let c = (pa[0] * 4.0) as usize + 4 * (pa[1] * 4.0) as usize;
+            assert!(!cells[c], "two samples in one stratum");
+            cells[c] = true;
+        }
+        let mut r = PixelSamples::new(&spec(SamplerKind::Random, 4), 3);
+        r.start([0, 0], 0);
+        let x = r.get2d();
+        r.start([0, 0], 0);
+        assert_eq!(x, r.get2d());
+    }
+}
