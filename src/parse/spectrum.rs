@@ -305,7 +305,10 @@ mod tests {
             "t.pbrt:3:5: parameter \"c\": expected 1 blackbody value (temperature and scale), got 4 numbers"
         );
         let cold = param(ParamType::Blackbody, nums(&[0.0, 1.0]));
-        assert_eq!(err(&cold), "t.pbrt:3:5: parameter \"c\": blackbody temperature must be a positive number of kelvin, got 0");
+        assert_eq!(
+            err(&cold),
+            "t.pbrt:3:5: parameter \"c\": blackbody temperature must be a positive number of kelvin, got 0"
+        );
     }
 
     #[test]
@@ -341,7 +344,10 @@ mod tests {
             odd.unwrap_err(),
             format!("{at}: spectrum file \"{d}/spds/odd.spd\": expected wavelength and value pairs, got 3 numbers")
         );
-        assert_eq!(bad.unwrap_err(), format!("{at}: spectrum file \"{d}/spds/bad.spd\" line 2: malformed number \"one\""));
+        assert_eq!(
+            bad.unwrap_err(),
+            format!("{at}: spectrum file \"{d}/spds/bad.spd\" line 2: malformed number \"one\"")
+        );
         assert_eq!(
             missing.unwrap_err(),
             format!("{at}: cannot read spectrum file \"{d}/spds/none.spd\": No such file or directory (os error 2)")
