@@ -667,6 +667,41 @@ mod tests {
     }
 
     #[test]
+    fn mangled_scenes_never_panic() {
+        let base = r#"LookAt 0 0 5 0 0 0 0 1 0 Camera "perspective" "float fov" [45]
+WorldBegin AttributeBegin Material "matte" "rgb Kd" [.5 .5 .5] "bool b" "true" "spectrum s" "x.spd"
+Shape "trianglemesh" "point P" [0 0 0 1 0 0 0 1 0] "integer indices" [0 1 2] # comment
+Texture "t" "spectrum" "imagemap" "string filename" "a\"b.png" AttributeEnd TransformTimes 0 1
+MediumInterface "a" "" ActiveTransform All Transform [1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1] WorldEnd"#;
+        let pieces = ["\"", "[", "]", "#", "\\", "\n", "-", ".", "e", "1", " ", "é", "Shape", "\"float x\"", "true"];
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut rand = |n: usize| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % n as u64) as usize
+        };
+        for _ in 0..5000 {
+            let mut chars: Vec<char> = base.chars().collect();
+            for _ in 0..1 + rand(4) {
+                let at = rand(chars.len() + 1);
+                match rand(3) {
+                    0 if at < chars.len() => {
+                        chars.remove(at);
+                    }
+                    1 => chars.truncate(at),
+                    _ => chars.splice(at..at, pieces[rand(pieces.len())].chars()).for_each(drop),
+                }
+            }
+            let text: String = chars.into_iter().collect();
+            if let Err(e) = parse_str(&text, Path::new("t.pbrt")) {
+                let loc = e.loc().expect("scene errors have a location");
+                assert!(loc.line as usize <= text.lines().count() + 1, "{e} in {text:?}");
+            }
+        }
+    }
+
+    #[test]
     fn suggestions_only_for_near_misses() {
         assert_eq!(closest("Shpae", DIRECTIVES.iter().map(|d| d.0)), Some("Shape"));
         assert_eq!(closest("WorldBgin", DIRECTIVES.iter().map(|d| d.0)), Some("WorldBegin"));
