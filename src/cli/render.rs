@@ -51,7 +51,7 @@ pub fn run(args: &RenderArgs) -> Result<String> {
     };
     // Settle the output name before rendering, so a bad extension fails fast.
     let out = output_path(args, &loaded.scene.film.filename);
-    crate::image::check_extension(&out)?;
+    crate::image::Format::from_path(&out)?;
     let result = render(&loaded.scene, loaded.integrator.as_ref(), &settings, &mut warnings);
     print_warnings(&warnings);
     let result = result?;

@@ -8,7 +8,7 @@
 use std::collections::HashMap;
 
 use crate::error::{Result, SourceLoc, Warnings};
-use crate::parse::{ParamList, TexOr};
+use crate::parse::{ParamList, ParamType, ParamValue, TexOr};
 
 /// What kind of value a schema entry reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -135,7 +135,7 @@ impl Capture<'_> {
     pub fn read(&mut self, params: &ParamList, schema: &[(&'static str, Kind)], out: &mut Props) -> Result<()> {
         for &(name, kind) in schema {
             let v = match kind {
-                Kind::SpectrumTex => match params.rgb_or_texture(name)? {
+                Kind::SpectrumTex => match self.spectrum_file_fallback(params, name, |p| p.rgb_or_texture(name))? {
                     Some(TexOr::Value(c)) => Some(Prop::Rgb(c.map(|x| x as f32))),
                     Some(TexOr::Texture(t)) => self.texture(&t, name, false, params).map(Prop::SpectrumTexture),
                     None => None,
@@ -145,7 +145,7 @@ impl Capture<'_> {
                     Some(TexOr::Texture(t)) => self.texture(&t, name, true, params).map(Prop::FloatTexture),
                     None => None,
                 },
-                Kind::Spectrum => params.rgb(name)?.map(|c| Prop::Rgb(c.map(|x| x as f32))),
+                Kind::Spectrum => self.spectrum_file_fallback(params, name, |p| p.rgb(name))?.map(|c| Prop::Rgb(c.map(|x| x as f32))),
                 Kind::Float => params.float(name)?.map(|v| Prop::Float(v as f32)),
                 Kind::Floats => params.floats(name)?.map(|v| Prop::Floats(v.iter().map(|&x| x as f32).collect())),
                 Kind::Int => params.int(name)?.map(Prop::Int),
@@ -166,6 +166,23 @@ impl Capture<'_> {
             }
         }
         Ok(())
+    }
+
+    /// Runs a colour lookup; a `spectrum` parameter naming a file that cannot be read (or a pbrt-v4 named
+    /// spectrum) becomes a warning and leaves the value unset, so the type's default applies.
+    fn spectrum_file_fallback<T>(&mut self, params: &ParamList, name: &str, f: impl Fn(&ParamList) -> Result<Option<T>>) -> Result<Option<T>> {
+        match f(params) {
+            Err(e) if params.iter().any(|p| p.name == name && p.ty == ParamType::Spectrum && matches!(p.value, ParamValue::Strings(_))) => {
+                let loc = params.loc_of(name).unwrap_or(self.loc);
+                let why = match e {
+                    crate::error::Error::Scene { msg, .. } => msg,
+                    other => other.to_string(),
+                };
+                self.warnings.at(loc, format!("{why}; using the default value"));
+                Ok(None)
+            }
+            other => other,
+        }
     }
 
     fn texture(&mut self, tex: &str, param: &str, float: bool, params: &ParamList) -> Option<u32> {
