@@ -17,6 +17,7 @@ use super::Image;
 
 /// Decodes an EXR file's bytes; the message says what is wrong.
 pub(crate) fn decode(bytes: &[u8]) -> Result<Image, String> {
+    check_sizes(bytes)?;
     // The crate returns errors for bad files; catching a panic as well keeps a decoder bug on some
     // hostile file from taking the whole program down.
     let read = catch_unwind(AssertUnwindSafe(|| {
@@ -69,6 +70,48 @@ pub(crate) fn decode(bytes: &[u8]) -> Result<Image, String> {
         .collect();
     Image::from_pixels(width, height, pixels)
         .ok_or_else(|| "EXR layer has a wrong pixel count".into())
+}
+
+/// Largest layer accepted, in pixels (16384 × 16384).
+const MAX_PIXELS: usize = 1 << 28;
+/// Largest uncompressed layer or block accepted, in bytes.
+const MAX_BYTES: usize = 1 << 32;
+
+/// Reads only the headers and refuses sizes the decoder would allocate blindly: a corrupt data window,
+/// tile size or channel list can otherwise ask for tens of gigabytes, which aborts the process.
+fn check_sizes(bytes: &[u8]) -> Result<(), String> {
+    let meta = catch_unwind(AssertUnwindSafe(|| {
+        exrs::MetaData::read_from_buffered(Cursor::new(bytes), false)
+    }));
+    let meta = match meta {
+        Ok(Ok(meta)) => meta,
+        Ok(Err(e)) => return Err(format!("cannot decode EXR: {e}")),
+        Err(_) => return Err("cannot decode EXR: the header reader failed on this file".into()),
+    };
+    for header in meta.headers.iter() {
+        let size = header.layer_size;
+        let bpp = header.channels.bytes_per_pixel;
+        let block_pixels = match header.blocks {
+            ::exr::meta::BlockDescription::Tiles(tiles) => {
+                tiles.tile_size.x().checked_mul(tiles.tile_size.y())
+            }
+            ::exr::meta::BlockDescription::ScanLines => size
+                .x()
+                .checked_mul(header.compression.scan_lines_per_block()),
+        };
+        let pixels = size.x().checked_mul(size.y());
+        let fits = |n: Option<usize>| {
+            n.is_some_and(|n| n <= MAX_PIXELS && n.checked_mul(bpp).is_some_and(|b| b <= MAX_BYTES))
+        };
+        if !fits(pixels) || !fits(block_pixels) {
+            return Err(format!(
+                "EXR layer of {}×{} pixels with {bpp} bytes per pixel is too large or corrupt (at most {MAX_PIXELS} pixels)",
+                size.x(),
+                size.y()
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Encodes `image` as float RGB, ZIP-compressed scanlines.
@@ -196,6 +239,32 @@ mod tests {
         assert!(decode(b"not an exr file at all").is_err());
         for n in [4, 8, 20, 100, good.len() / 2, good.len() - 1] {
             assert!(decode(&good[..n]).is_err(), "prefix {n}");
+        }
+    }
+
+    /// Regression: a corrupt header once made the decoder ask for 36 GB and abort the process.
+    #[test]
+    fn corrupt_sizes_are_refused_before_decoding() {
+        let good = encoded(&sample());
+        let at = good.windows(10).position(|w| w == b"dataWindow").unwrap();
+        // box2i after "dataWindow\0box2i\0" and the 4-byte attribute size: xmin, ymin, xmax, ymax.
+        let xmax = at + b"dataWindow\0box2i\0".len() + 4 + 8;
+        let mut bad = good.clone();
+        bad[xmax..xmax + 4].copy_from_slice(&2_000_000_000i32.to_le_bytes());
+        let msg = decode(&bad).unwrap_err();
+        assert!(msg.contains("EXR"), "{msg}");
+        // Cheap deterministic fuzz over byte changes: every outcome is an image or a message.
+        let mut state = 12345u64;
+        for _ in 0..2000 {
+            let mut b = good.clone();
+            for _ in 0..3 {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                let i = (state >> 33) as usize % b.len();
+                b[i] = (state >> 20) as u8;
+            }
+            let _ = decode(&b);
         }
     }
 }
