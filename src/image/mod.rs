@@ -1,11 +1,12 @@
 //! Images: linear f32 RGB in memory; EXR, PFM and PNG in and out.
 //!
-//! [`Image`] is what the renderer fills and what the metrics compare. [`read`] and [`write`] pick the
-//! file format from the extension (`.exr`, `.pfm`, `.png`, any case). The readers accept what other tools
-//! commonly write (EXR with R,G,B[,A] or Y channels in half, float or uint, scanline or tiled; PFM colour
-//! `PF` and grey `Pf` in either byte order; 8- and 16-bit PNG); the writers produce one fixed form each
-//! (float RGB scanline EXR, little-endian `PF` PFM, 8-bit sRGB PNG). Writes go to a temporary file in the
-//! target directory that is renamed at the end, so a failed write never leaves a partial file.
+//! [`Image`] is what the renderer fills and what the metrics compare. [`read`] and [`write()`] pick the
+//! file format from the extension (`.exr`, `.pfm`, `.png`, any case). The readers accept what other
+//! tools commonly write (EXR with R, G, B and optionally A, or Y channels in half, float or uint,
+//! scanline or tiled; PFM colour `PF` and grey `Pf` in either byte order; 8- and 16-bit PNG); the
+//! writers produce one fixed form each (float RGB scanline EXR, little-endian `PF` PFM, 8-bit sRGB PNG).
+//! Writes go to a temporary file in the target directory that is renamed at the end, so a failed write
+//! never leaves a partial file.
 //!
 //! Every problem with a file is an [`Error::file`] naming it; no input file makes the readers panic.
 //!
@@ -106,7 +107,7 @@ impl Image {
     }
 }
 
-/// The file formats [`read`] and [`write`] know, chosen by extension.
+/// The file formats [`read`] and [`write()`] know, chosen by extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
     /// OpenEXR (`.exr`).
