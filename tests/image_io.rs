@@ -15,10 +15,8 @@ fn scratch(tag: &str) -> PathBuf {
 }
 
 fn entries(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
+    let mut v: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
     v.sort();
     v
 }
@@ -27,15 +25,7 @@ fn gradient(width: usize, height: usize) -> Image {
     let mut im = Image::new(width, height);
     for y in 0..height {
         for x in 0..width {
-            im.set(
-                x,
-                y,
-                [
-                    x as f32 / width as f32,
-                    y as f32 / height as f32 * 10.0,
-                    0.001 * (x * y) as f32,
-                ],
-            );
+            im.set(x, y, [x as f32 / width as f32, y as f32 / height as f32 * 10.0, 0.001 * (x * y) as f32]);
         }
     }
     im
@@ -79,10 +69,7 @@ fn pfm_is_written_like_pbrt_v3() {
     let header = b"PF\n2 2\n-1\n";
     assert!(bytes.starts_with(header));
     assert_eq!(bytes.len(), header.len() + 2 * 2 * 3 * 4);
-    assert_eq!(
-        f32::from_le_bytes(bytes[header.len()..header.len() + 4].try_into().unwrap()),
-        1.0
-    );
+    assert_eq!(f32::from_le_bytes(bytes[header.len()..header.len() + 4].try_into().unwrap()), 1.0);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -94,11 +81,7 @@ fn failed_writes_leave_nothing() {
     let e = image::write(&im, &dir.join("nope/out.exr")).unwrap_err();
     assert!(e.to_string().contains("nope/out.exr"), "{e}");
     // An image that cannot be written (its pixel count does not match its size).
-    let broken = Image {
-        width: 4,
-        height: 4,
-        pixels: vec![[0.0; 3]; 3],
-    };
+    let broken = Image { width: 4, height: 4, pixels: vec![[0.0; 3]; 3] };
     for name in ["x.exr", "x.pfm", "x.png"] {
         assert!(image::write(&broken, &dir.join(name)).is_err());
     }
@@ -116,10 +99,7 @@ fn unknown_extensions_are_usage_errors() {
     let e = image::write(&gradient(2, 2), Path::new("out.tiff")).unwrap_err();
     assert!(matches!(e, Error::Usage(_)));
     assert!(e.to_string().contains(".exr, .pfm or .png"), "{e}");
-    assert!(matches!(
-        image::read(Path::new("in.hdr")).unwrap_err(),
-        Error::Usage(_)
-    ));
+    assert!(matches!(image::read(Path::new("in.hdr")).unwrap_err(), Error::Usage(_)));
 }
 
 #[test]
@@ -138,12 +118,7 @@ fn bad_files_are_errors_that_name_the_file() {
         let e = image::read(&path).unwrap_err().to_string();
         assert!(e.contains(name) && e.contains(needle), "{name}: {e}");
     }
-    let e = image::read(&dir.join("missing.pfm"))
-        .unwrap_err()
-        .to_string();
-    assert!(
-        e.contains("missing.pfm") && e.contains("cannot read"),
-        "{e}"
-    );
+    let e = image::read(&dir.join("missing.pfm")).unwrap_err().to_string();
+    assert!(e.contains("missing.pfm") && e.contains("cannot read"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

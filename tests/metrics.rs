@@ -8,17 +8,11 @@ use cachert::metrics::{self, Metric, flip};
 
 /// The shared FLIP test vectors, or `None` (with a printed reason) when the checkout has no `../shared`.
 fn flip_vectors() -> Option<PathBuf> {
-    let dir = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../shared/flip-vectors"
-    ));
+    let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/flip-vectors"));
     if dir.join("expected.txt").is_file() {
         Some(dir)
     } else {
-        eprintln!(
-            "skipped: {} not found (the shared test vectors live next to the checkout)",
-            dir.display()
-        );
+        eprintln!("skipped: {} not found (the shared test vectors live next to the checkout)", dir.display());
         None
     }
 }
@@ -28,35 +22,19 @@ fn flip_matches_nvidia_flip_evaluator_on_the_shared_vectors() {
     let Some(dir) = flip_vectors() else { return };
     let expected = std::fs::read_to_string(dir.join("expected.txt")).unwrap();
     let mut checked = 0;
-    for line in expected
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
-    {
+    for line in expected.lines().filter(|l| !l.starts_with('#') && !l.trim().is_empty()) {
         let f: Vec<&str> = line.split_whitespace().collect();
-        let [pair, reference, test, mode, value] = f[..] else {
-            panic!("bad line {line:?}")
-        };
+        let [pair, reference, test, mode, value] = f[..] else { panic!("bad line {line:?}") };
         let want: f64 = value.parse().unwrap();
         let reference = image::read(&dir.join(reference)).unwrap();
         let test = image::read(&dir.join(test)).unwrap();
         let got = match mode {
-            "ldr" => flip::ldr_flip_map(&test, &reference, flip::DEFAULT_PPD)
-                .unwrap()
-                .mean(),
-            "hdr" => flip::hdr_flip_map(&test, &reference, flip::DEFAULT_PPD)
-                .unwrap()
-                .map
-                .mean(),
+            "ldr" => flip::ldr_flip_map(&test, &reference, flip::DEFAULT_PPD).unwrap().mean(),
+            "hdr" => flip::hdr_flip_map(&test, &reference, flip::DEFAULT_PPD).unwrap().map.mean(),
             _ => panic!("unknown mode {mode}"),
         };
-        println!(
-            "{pair:16} {mode}: expected {want:.6}, got {got:.6}, difference {:+.2e}",
-            got - want
-        );
-        assert!(
-            (got - want).abs() <= 1e-3,
-            "{pair} {mode}: expected {want}, got {got}"
-        );
+        println!("{pair:16} {mode}: expected {want:.6}, got {got:.6}, difference {:+.2e}", got - want);
+        assert!((got - want).abs() <= 1e-3, "{pair} {mode}: expected {want}, got {got}");
         checked += 1;
     }
     assert_eq!(checked, 6);
@@ -80,15 +58,7 @@ fn pattern(width: usize, height: usize, seed: u64, noise: f32) -> Image {
             let base = 0.05 + 0.6 * u * v + if (x / 37 + y / 23) % 7 == 0 { 6.0 } else { 0.0 };
             let i = (y * width + x) as u64;
             let n = |c: u64| noise * (hash01(seed * 3 + c, i) - 0.5);
-            im.set(
-                x,
-                y,
-                [
-                    (base + n(0)).max(0.0),
-                    (0.8 * base + n(1)).max(0.0),
-                    (0.5 * base * u + n(2)).max(0.0),
-                ],
-            );
+            im.set(x, y, [(base + n(0)).max(0.0), (0.8 * base + n(1)).max(0.0), (0.5 * base * u + n(2)).max(0.0)]);
         }
     }
     im
@@ -110,23 +80,14 @@ fn one_changed_pixel_matches_flip_evaluator() {
     let ldr = flip::ldr_flip_map(&test, &reference, flip::DEFAULT_PPD).unwrap();
     assert!((ldr.mean() - 0.019_195_951).abs() < 1e-6, "{}", ldr.mean());
     assert!((ldr.values[7 * 17 + 5] - 0.278_477_67).abs() < 1e-6);
-    let worst = (0..ldr.values.len())
-        .max_by(|&a, &b| ldr.values[a].total_cmp(&ldr.values[b]))
-        .unwrap();
+    let worst = (0..ldr.values.len()).max_by(|&a, &b| ldr.values[a].total_cmp(&ldr.values[b])).unwrap();
     assert_eq!((worst % 17, worst / 17), (5, 7));
     assert_eq!(ldr.values[16], 0.0);
 
     let hdr = flip::hdr_flip_map(&test, &reference, flip::DEFAULT_PPD).unwrap();
     assert_eq!(hdr.exposures.count, 4);
-    assert!(
-        (hdr.exposures.start - -0.916_702_8).abs() < 1e-6
-            && (hdr.exposures.stop - 3.083_297_3).abs() < 1e-6
-    );
-    assert!(
-        (hdr.map.mean() - 0.016_448_347).abs() < 1e-6,
-        "{}",
-        hdr.map.mean()
-    );
+    assert!((hdr.exposures.start - -0.916_702_8).abs() < 1e-6 && (hdr.exposures.stop - 3.083_297_3).abs() < 1e-6);
+    assert!((hdr.map.mean() - 0.016_448_347).abs() < 1e-6, "{}", hdr.map.mean());
     assert!((hdr.map.values[7 * 17 + 5] - 0.214_383_33).abs() < 1e-6);
 }
 
@@ -147,17 +108,9 @@ fn non_finite_test_values_match_flip_evaluator() {
     ] {
         let mut test = reference.clone();
         test.set(4, 4, [v, 0.5, 0.5]);
-        let l = flip::ldr_flip_map(&test, &reference, flip::DEFAULT_PPD)
-            .unwrap()
-            .mean();
-        let h = flip::hdr_flip_map(&test, &reference, flip::DEFAULT_PPD)
-            .unwrap()
-            .map
-            .mean();
-        assert!(
-            (l - ldr).abs() < 1e-6 && (h - hdr).abs() < 1e-6,
-            "{v}: {l} {h}"
-        );
+        let l = flip::ldr_flip_map(&test, &reference, flip::DEFAULT_PPD).unwrap().mean();
+        let h = flip::hdr_flip_map(&test, &reference, flip::DEFAULT_PPD).unwrap().map.mean();
+        assert!((l - ldr).abs() < 1e-6 && (h - hdr).abs() < 1e-6, "{v}: {l} {h}");
     }
 }
 
@@ -166,10 +119,7 @@ fn results_do_not_depend_on_the_thread_count() {
     let reference = pattern(61, 47, 1, 0.0);
     let test = pattern(61, 47, 2, 0.3);
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| {
             let hdr = flip::hdr_flip_map(&test, &reference, flip::DEFAULT_PPD).unwrap();
             let ldr = flip::ldr_flip_map(&test, &reference, flip::DEFAULT_PPD).unwrap();
@@ -181,21 +131,8 @@ fn results_do_not_depend_on_the_thread_count() {
     let one = run(1);
     for threads in [2, 3, 5] {
         let other = run(threads);
-        assert!(
-            one.0
-                .map
-                .values
-                .iter()
-                .zip(&other.0.map.values)
-                .all(|(a, b)| a.to_bits() == b.to_bits())
-        );
-        assert!(
-            one.1
-                .values
-                .iter()
-                .zip(&other.1.values)
-                .all(|(a, b)| a.to_bits() == b.to_bits())
-        );
+        assert!(one.0.map.values.iter().zip(&other.0.map.values).all(|(a, b)| a.to_bits() == b.to_bits()));
+        assert!(one.1.values.iter().zip(&other.1.values).all(|(a, b)| a.to_bits() == b.to_bits()));
         assert_eq!((one.2, one.3), (other.2, other.3));
         assert_eq!(one.0.map.mean().to_bits(), other.0.map.mean().to_bits());
     }
@@ -233,9 +170,7 @@ mod compare_command {
     }
 
     fn args(list: &[&str]) -> CompareArgs {
-        Cli::try_parse_from(std::iter::once("compare").chain(list.iter().copied()))
-            .unwrap()
-            .args
+        Cli::try_parse_from(std::iter::once("compare").chain(list.iter().copied())).unwrap().args
     }
 
     fn files(dir: &Path) -> (String, String) {
@@ -256,16 +191,10 @@ mod compare_command {
         let out = run(&a).unwrap();
         let lines: Vec<&str> = out.lines().collect();
         assert_eq!(lines.len(), 2, "{out}");
-        assert!(
-            lines[0].starts_with("rmse ") && lines[1].starts_with("flip "),
-            "{out}"
-        );
+        assert!(lines[0].starts_with("rmse ") && lines[1].starts_with("flip "), "{out}");
         let rmse: f64 = lines[0][5..].parse().unwrap();
-        let expected = metrics::rmse(
-            &image::read(Path::new(&t)).unwrap(),
-            &image::read(Path::new(&r)).unwrap(),
-        )
-        .unwrap();
+        let expected =
+            metrics::rmse(&image::read(Path::new(&t)).unwrap(), &image::read(Path::new(&r)).unwrap()).unwrap();
         assert!((rmse - expected).abs() < 1e-6);
         std::fs::remove_dir_all(&dir).unwrap();
     }
@@ -291,19 +220,14 @@ mod compare_command {
         assert_eq!(v["width"], 40);
         let flip_value = v["metrics"]["flip"].as_f64().unwrap();
         assert!(flip_value > 0.0 && flip_value < 1.0);
-        assert!(
-            v["metrics"]["ldrflip"].as_f64().is_some() && v["metrics"]["relmse"].as_f64().is_some()
-        );
+        assert!(v["metrics"]["ldrflip"].as_f64().is_some() && v["metrics"]["relmse"].as_f64().is_some());
         assert!(v["hdr_flip"]["exposures"]["count"].as_u64().unwrap() >= 2);
         let png = image::read(&fm).unwrap();
         assert_eq!((png.width, png.height), (40, 30));
         let diff = image::read(&dm).unwrap();
         let test = image::read(Path::new(&t)).unwrap();
         let reference = image::read(Path::new(&r)).unwrap();
-        assert_eq!(
-            diff.get(3, 4)[1],
-            (test.get(3, 4)[1] - reference.get(3, 4)[1]).abs()
-        );
+        assert_eq!(diff.get(3, 4)[1], (test.get(3, 4)[1] - reference.get(3, 4)[1]).abs());
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
@@ -312,15 +236,7 @@ mod compare_command {
         let dir = scratch("cli-raw");
         let (t, r) = files(&dir);
         let fm = dir.join("flip.pfm");
-        let out = run(&args(&[
-            &t,
-            &r,
-            "--metric",
-            "rmse",
-            "--flip-map",
-            fm.to_str().unwrap(),
-        ]))
-        .unwrap();
+        let out = run(&args(&[&t, &r, "--metric", "rmse", "--flip-map", fm.to_str().unwrap()])).unwrap();
         assert_eq!(out.lines().count(), 1);
         let map = image::read(&fm).unwrap();
         let mean = map.mean()[0];
@@ -339,36 +255,22 @@ mod compare_command {
         let dir = scratch("cli-bad");
         let (t, r) = files(&dir);
         let missing = dir.join("missing.exr");
-        let e = run(&args(&[&t, missing.to_str().unwrap()]))
-            .unwrap_err()
-            .to_string();
+        let e = run(&args(&[&t, missing.to_str().unwrap()])).unwrap_err().to_string();
         assert!(e.contains("missing.exr"), "{e}");
 
         let small = dir.join("small.pfm");
         image::write(&Image::new(4, 4), &small).unwrap();
-        let e = run(&args(&[small.to_str().unwrap(), &r]))
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("small.pfm") && e.contains("4×4") && e.contains("40×30"),
-            "{e}"
-        );
+        let e = run(&args(&[small.to_str().unwrap(), &r])).unwrap_err().to_string();
+        assert!(e.contains("small.pfm") && e.contains("4×4") && e.contains("40×30"), "{e}");
 
         let mut nan = pattern(40, 30, 1, 0.0);
         nan.set(12, 3, [0.0, f32::NAN, 0.0]);
         let nan_path = dir.join("nan.pfm");
         image::write(&nan, &nan_path).unwrap();
-        let e = run(&args(&[&t, nan_path.to_str().unwrap()]))
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("nan.pfm") && e.contains("(12, 3)") && e.contains("channel G"),
-            "{e}"
-        );
+        let e = run(&args(&[&t, nan_path.to_str().unwrap()])).unwrap_err().to_string();
+        assert!(e.contains("nan.pfm") && e.contains("(12, 3)") && e.contains("channel G"), "{e}");
 
-        let e = run(&args(&[&t, &r, "--flip-map", "out.jpg"]))
-            .unwrap_err()
-            .to_string();
+        let e = run(&args(&[&t, &r, "--flip-map", "out.jpg"])).unwrap_err().to_string();
         assert!(e.contains(".exr, .pfm or .png"), "{e}");
         assert!(Cli::try_parse_from(["compare", &t, &r, "--metric", "psnr"]).is_err());
         std::fs::remove_dir_all(&dir).unwrap();

@@ -50,9 +50,7 @@ pub fn run(args: &CompareArgs) -> Result<String> {
         }
     }
     if wanted.is_empty() {
-        return Err(Error::usage(
-            "--metric needs at least one of rmse, relmse, flip, ldrflip",
-        ));
+        return Err(Error::usage("--metric needs at least one of rmse, relmse, flip, ldrflip"));
     }
     let test = image::read(&args.test)?;
     let reference = image::read(&args.reference)?;
@@ -77,21 +75,12 @@ pub fn run(args: &CompareArgs) -> Result<String> {
     Ok(if args.json {
         json_report(args, &reference, &eval.values, hdr_info)
     } else {
-        eval.values
-            .iter()
-            .map(|(m, v)| format!("{m} {}", format_value(*v)))
-            .collect::<Vec<_>>()
-            .join("\n")
+        eval.values.iter().map(|(m, v)| format!("{m} {}", format_value(*v))).collect::<Vec<_>>().join("\n")
     })
 }
 
 /// Same size, and a finite reference; errors name the file at fault and the pixel.
-fn check_pair(
-    test: &Image,
-    reference: &Image,
-    test_path: &Path,
-    reference_path: &Path,
-) -> Result<()> {
+fn check_pair(test: &Image, reference: &Image, test_path: &Path, reference_path: &Path) -> Result<()> {
     if (test.width, test.height) != (reference.width, reference.height) {
         return Err(Error::file(
             test_path,
@@ -127,28 +116,16 @@ fn write_flip_map(map: &flip::FlipMap, path: &Path) -> Result<()> {
 
 /// |test − reference| per pixel and channel.
 fn abs_difference(test: &Image, reference: &Image) -> Image {
-    let pixels = test
-        .pixels
-        .iter()
-        .zip(&reference.pixels)
-        .map(|(t, r)| [0, 1, 2].map(|c| (t[c] - r[c]).abs()))
-        .collect();
-    Image {
-        width: reference.width,
-        height: reference.height,
-        pixels,
-    }
+    let pixels =
+        test.pixels.iter().zip(&reference.pixels).map(|(t, r)| [0, 1, 2].map(|c| (t[c] - r[c]).abs())).collect();
+    Image { width: reference.width, height: reference.height, pixels }
 }
 
 /// A value with at least six significant digits: fixed-point with six decimals in [0.001, 10⁶), and
 /// scientific notation outside (so small RMSEs keep their digits).
 fn format_value(v: f64) -> String {
     let a = v.abs();
-    if v == 0.0 || !v.is_finite() || (1e-3..1e6).contains(&a) {
-        format!("{v:.6}")
-    } else {
-        format!("{v:.6e}")
-    }
+    if v == 0.0 || !v.is_finite() || (1e-3..1e6).contains(&a) { format!("{v:.6}") } else { format!("{v:.6e}") }
 }
 
 /// The JSON report: files, size, metric values (full precision) and the HDR-FLIP exposures.
@@ -158,10 +135,7 @@ fn json_report(
     values: &[(Metric, f64)],
     hdr: Option<flip::ExposureRange>,
 ) -> String {
-    let metrics: Map<String, Value> = values
-        .iter()
-        .map(|(m, v)| (m.name().to_string(), json!(v)))
-        .collect();
+    let metrics: Map<String, Value> = values.iter().map(|(m, v)| (m.name().to_string(), json!(v))).collect();
     let mut report = json!({
         "test": args.test.display().to_string(),
         "reference": args.reference.display().to_string(),
@@ -170,10 +144,7 @@ fn json_report(
         "metrics": metrics,
     });
     if let Some(exposures) = hdr {
-        report["hdr_flip"] = json!(flip::HdrFlipInfo {
-            ppd: flip::DEFAULT_PPD,
-            exposures
-        });
+        report["hdr_flip"] = json!(flip::HdrFlipInfo { ppd: flip::DEFAULT_PPD, exposures });
     }
     serde_json::to_string_pretty(&report).expect("a JSON value always serialises")
 }

@@ -29,20 +29,35 @@ pub fn run(args: &InfoArgs) -> Result<String> {
     let object_tris: usize = s.geometry.objects.iter().flat_map(|o| &o.meshes).map(|m| m.triangle_count()).sum();
     let (_, objects, instances) = s.geometry.accel.counts();
     let instanced: usize = instance_triangles(s);
-    let _ = writeln!(o, "shapes      {} ({} meshes, {} analytic)", st.shapes, s.geometry.meshes.len(), s.geometry.accel.quadrics.len());
-    let _ = writeln!(o, "triangles   {} stored ({world_tris} world, {object_tris} in {objects} object definitions)", st.triangles);
+    let _ = writeln!(
+        o,
+        "shapes      {} ({} meshes, {} analytic)",
+        st.shapes,
+        s.geometry.meshes.len(),
+        s.geometry.accel.quadrics.len()
+    );
+    let _ = writeln!(
+        o,
+        "triangles   {} stored ({world_tris} world, {object_tris} in {objects} object definitions)",
+        st.triangles
+    );
     let _ = writeln!(o, "instances   {instances} ({instanced} triangles if flattened)");
     let _ = writeln!(o, "lights      {} + {} area lights", s.lights.len(), s.area_lights.len());
     let _ = writeln!(o, "materials   {}  textures {}", s.materials.len(), s.textures.len());
     match s.bounds() {
         Some((lo, hi)) => {
-            let _ = writeln!(o, "bounds      {:?} .. {:?} (diagonal {:.4})", lo.to_array(), hi.to_array(), s.diagonal());
+            let _ =
+                writeln!(o, "bounds      {:?} .. {:?} (diagonal {:.4})", lo.to_array(), hi.to_array(), s.diagonal());
         }
         None => {
             let _ = writeln!(o, "bounds      empty world");
         }
     }
-    let _ = writeln!(o, "time        parse {:.3} s | scene build {:.3} s | BVH build {:.3} s", st.parse_secs, st.build_secs, st.bvh_secs);
+    let _ = writeln!(
+        o,
+        "time        parse {:.3} s | scene build {:.3} s | BVH build {:.3} s",
+        st.parse_secs, st.build_secs, st.bvh_secs
+    );
     let _ = writeln!(o, "warnings    {}", l.warnings.len());
     for w in l.warnings.iter() {
         let _ = writeln!(o, "  {w}");
@@ -51,6 +66,7 @@ pub fn run(args: &InfoArgs) -> Result<String> {
 }
 
 fn instance_triangles(s: &crate::scene::Scene) -> usize {
-    let per_object: Vec<usize> = s.geometry.objects.iter().map(|o| o.meshes.iter().map(|m| m.triangle_count()).sum()).collect();
+    let per_object: Vec<usize> =
+        s.geometry.objects.iter().map(|o| o.meshes.iter().map(|m| m.triangle_count()).sum()).collect();
     (0..s.geometry.accel.counts().2).map(|i| per_object[s.geometry.accel.instance(i as u32).object as usize]).sum()
 }

@@ -26,15 +26,10 @@ pub(crate) fn write_atomically(
     let mut out = BufWriter::new(file);
     let written = fill(&mut out)
         .and_then(|()| out.flush().map_err(|e| format!("cannot write: {e}")))
-        .and_then(|()| {
-            out.get_ref()
-                .sync_all()
-                .map_err(|e| format!("cannot write: {e}"))
-        });
+        .and_then(|()| out.get_ref().sync_all().map_err(|e| format!("cannot write: {e}")));
     drop(out);
     let renamed = written.and_then(|()| {
-        std::fs::rename(&tmp, path)
-            .map_err(|e| format!("cannot move the finished file into place: {e}"))
+        std::fs::rename(&tmp, path).map_err(|e| format!("cannot move the finished file into place: {e}"))
     });
     renamed.map_err(|msg| {
         // Best effort: the temporary may already be gone, and the error to report is `msg`.
@@ -45,10 +40,7 @@ pub(crate) fn write_atomically(
 
 /// `dir/.name.tmp-PID-N` next to `path`.
 fn temporary_name(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
     path.with_file_name(format!(".{name}.tmp-{}-{n}", std::process::id()))
 }
@@ -65,10 +57,8 @@ mod tests {
     }
 
     fn entries(dir: &Path) -> Vec<String> {
-        let mut v: Vec<String> = std::fs::read_dir(dir)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
+        let mut v: Vec<String> =
+            std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
         v.sort();
         v
     }
@@ -77,10 +67,7 @@ mod tests {
     fn success_leaves_exactly_the_target() {
         let dir = scratch_dir("ok");
         let target = dir.join("a.bin");
-        write_atomically(&target, |w| {
-            w.write_all(b"hello").map_err(|e| e.to_string())
-        })
-        .unwrap();
+        write_atomically(&target, |w| w.write_all(b"hello").map_err(|e| e.to_string())).unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"hello");
         assert_eq!(entries(&dir), vec!["a.bin".to_string()]);
         std::fs::remove_dir_all(&dir).unwrap();
@@ -95,10 +82,7 @@ mod tests {
             Err("encoder gave up".to_string())
         })
         .unwrap_err();
-        assert!(
-            err.to_string().contains("a.bin") && err.to_string().contains("encoder gave up"),
-            "{err}"
-        );
+        assert!(err.to_string().contains("a.bin") && err.to_string().contains("encoder gave up"), "{err}");
         assert!(entries(&dir).is_empty(), "{:?}", entries(&dir));
         std::fs::remove_dir_all(&dir).unwrap();
     }

@@ -37,12 +37,7 @@ pub(crate) fn decode(bytes: &[u8]) -> Result<Image, String> {
     let layer = &image.layer_data;
     let (width, height) = (layer.size.x(), layer.size.y());
     let channels = &layer.channel_data.list;
-    let find = |name: &str| {
-        channels
-            .iter()
-            .find(|c| c.name.eq(name))
-            .map(|c| &c.sample_data)
-    };
+    let find = |name: &str| channels.iter().find(|c| c.name.eq(name)).map(|c| &c.sample_data);
     let planes: Vec<&exrs::FlatSamples> = match (find("R"), find("G"), find("B"), find("Y")) {
         (Some(r), Some(g), Some(b), _) => vec![r, g, b],
         (None, None, None, Some(y)) => vec![y],
@@ -56,9 +51,7 @@ pub(crate) fn decode(bytes: &[u8]) -> Result<Image, String> {
     };
     let n = width * height;
     if n == 0 || planes.iter().any(|p| p.len() != n) {
-        return Err(format!(
-            "EXR layer of {width}×{height} pixels has a wrong sample count"
-        ));
+        return Err(format!("EXR layer of {width}×{height} pixels has a wrong sample count"));
     }
     let values: Vec<Vec<f32>> = planes.iter().map(|p| p.values_as_f32().collect()).collect();
     let pixels = (0..n)
@@ -68,8 +61,7 @@ pub(crate) fn decode(bytes: &[u8]) -> Result<Image, String> {
             _ => unreachable!("one or three planes were selected above"),
         })
         .collect();
-    Image::from_pixels(width, height, pixels)
-        .ok_or_else(|| "EXR layer has a wrong pixel count".into())
+    Image::from_pixels(width, height, pixels).ok_or_else(|| "EXR layer has a wrong pixel count".into())
 }
 
 /// Largest layer accepted, in pixels (16384 × 16384).
@@ -80,9 +72,7 @@ const MAX_BYTES: usize = 1 << 32;
 /// Reads only the headers and refuses sizes the decoder would allocate blindly: a corrupt data window,
 /// tile size or channel list can otherwise ask for tens of gigabytes, which aborts the process.
 fn check_sizes(bytes: &[u8]) -> Result<(), String> {
-    let meta = catch_unwind(AssertUnwindSafe(|| {
-        exrs::MetaData::read_from_buffered(Cursor::new(bytes), false)
-    }));
+    let meta = catch_unwind(AssertUnwindSafe(|| exrs::MetaData::read_from_buffered(Cursor::new(bytes), false)));
     let meta = match meta {
         Ok(Ok(meta)) => meta,
         Ok(Err(e)) => return Err(format!("cannot decode EXR: {e}")),
@@ -92,17 +82,12 @@ fn check_sizes(bytes: &[u8]) -> Result<(), String> {
         let size = header.layer_size;
         let bpp = header.channels.bytes_per_pixel;
         let block_pixels = match header.blocks {
-            ::exr::meta::BlockDescription::Tiles(tiles) => {
-                tiles.tile_size.x().checked_mul(tiles.tile_size.y())
-            }
-            ::exr::meta::BlockDescription::ScanLines => size
-                .x()
-                .checked_mul(header.compression.scan_lines_per_block()),
+            ::exr::meta::BlockDescription::Tiles(tiles) => tiles.tile_size.x().checked_mul(tiles.tile_size.y()),
+            ::exr::meta::BlockDescription::ScanLines => size.x().checked_mul(header.compression.scan_lines_per_block()),
         };
         let pixels = size.x().checked_mul(size.y());
-        let fits = |n: Option<usize>| {
-            n.is_some_and(|n| n <= MAX_PIXELS && n.checked_mul(bpp).is_some_and(|b| b <= MAX_BYTES))
-        };
+        let fits =
+            |n: Option<usize>| n.is_some_and(|n| n <= MAX_PIXELS && n.checked_mul(bpp).is_some_and(|b| b <= MAX_BYTES));
         if !fits(pixels) || !fits(block_pixels) {
             return Err(format!(
                 "EXR layer of {}×{} pixels with {bpp} bytes per pixel is too large or corrupt (at most {MAX_PIXELS} pixels)",
@@ -163,11 +148,7 @@ mod tests {
             .iter()
             .map(|(name, v)| {
                 let samples = if half {
-                    exrs::FlatSamples::F16(
-                        v.iter()
-                            .map(|&x| ::exr::prelude::f16::from_f32(x))
-                            .collect(),
-                    )
+                    exrs::FlatSamples::F16(v.iter().map(|&x| ::exr::prelude::f16::from_f32(x)).collect())
                 } else {
                     exrs::FlatSamples::F32(v.to_vec())
                 };
@@ -176,19 +157,12 @@ mod tests {
             .collect();
         let encoding = exrs::Encoding {
             compression: exrs::Compression::PIZ,
-            blocks: if tiled {
-                exrs::Blocks::Tiles(exrs::Vec2(16, 16))
-            } else {
-                exrs::Blocks::ScanLines
-            },
+            blocks: if tiled { exrs::Blocks::Tiles(exrs::Vec2(16, 16)) } else { exrs::Blocks::ScanLines },
             line_order: exrs::LineOrder::Increasing,
         };
         let channels = exrs::AnyChannels::sort(list.into());
         let mut c = Cursor::new(Vec::new());
-        exrs::Image::from_encoded_channels((2, 2), encoding, channels)
-            .write()
-            .to_buffered(&mut c)
-            .unwrap();
+        exrs::Image::from_encoded_channels((2, 2), encoding, channels).write().to_buffered(&mut c).unwrap();
         c.into_inner()
     }
 
@@ -198,12 +172,7 @@ mod tests {
         let g = [0.5; 4];
         let b = [0.25, 0.0, 0.0, 8.0];
         let a = [1.0; 4];
-        let im = decode(&any_channels(
-            &[("R", r), ("G", g), ("B", b), ("A", a)],
-            true,
-            true,
-        ))
-        .unwrap();
+        let im = decode(&any_channels(&[("R", r), ("G", g), ("B", b), ("A", a)], true, true)).unwrap();
         assert_eq!((im.width, im.height), (2, 2));
         assert_eq!(im.get(1, 0), [1.0, 0.5, 0.0]);
         assert_eq!(im.get(1, 1), [3.0, 0.5, 8.0]);
@@ -213,22 +182,9 @@ mod tests {
 
     #[test]
     fn unsupported_layouts_list_the_channels() {
-        let msg = decode(&any_channels(
-            &[("Z", [0.0; 4]), ("A", [1.0; 4])],
-            false,
-            false,
-        ))
-        .unwrap_err();
-        assert!(
-            msg.contains("[A, Z]") && msg.contains("expected R, G, B"),
-            "{msg}"
-        );
-        let msg = decode(&any_channels(
-            &[("R", [0.0; 4]), ("G", [1.0; 4])],
-            false,
-            false,
-        ))
-        .unwrap_err();
+        let msg = decode(&any_channels(&[("Z", [0.0; 4]), ("A", [1.0; 4])], false, false)).unwrap_err();
+        assert!(msg.contains("[A, Z]") && msg.contains("expected R, G, B"), "{msg}");
+        let msg = decode(&any_channels(&[("R", [0.0; 4]), ("G", [1.0; 4])], false, false)).unwrap_err();
         assert!(msg.contains("[G, R]"), "{msg}");
     }
 
@@ -258,9 +214,7 @@ mod tests {
         for _ in 0..2000 {
             let mut b = good.clone();
             for _ in 0..3 {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
                 let i = (state >> 33) as usize % b.len();
                 b[i] = (state >> 20) as u8;
             }

@@ -37,42 +37,24 @@ pub struct Image {
 impl Image {
     /// A black image of the given size.
     pub fn new(width: usize, height: usize) -> Image {
-        Image {
-            width,
-            height,
-            pixels: vec![[0.0; 3]; width * height],
-        }
+        Image { width, height, pixels: vec![[0.0; 3]; width * height] }
     }
 
     /// An image made from its pixels (row-major, top row first); `None` when the count is not
     /// `width * height`.
     pub fn from_pixels(width: usize, height: usize, pixels: Vec<[f32; 3]>) -> Option<Image> {
-        (width.checked_mul(height) == Some(pixels.len())).then_some(Image {
-            width,
-            height,
-            pixels,
-        })
+        (width.checked_mul(height) == Some(pixels.len())).then_some(Image { width, height, pixels })
     }
 
     /// The pixel in column `x`, row `y` (row 0 is the top). Panics when outside the image.
     pub fn get(&self, x: usize, y: usize) -> [f32; 3] {
-        assert!(
-            x < self.width && y < self.height,
-            "pixel ({x}, {y}) outside a {}×{} image",
-            self.width,
-            self.height
-        );
+        assert!(x < self.width && y < self.height, "pixel ({x}, {y}) outside a {}×{} image", self.width, self.height);
         self.pixels[y * self.width + x]
     }
 
     /// Sets the pixel in column `x`, row `y`. Panics when outside the image.
     pub fn set(&mut self, x: usize, y: usize, c: [f32; 3]) {
-        assert!(
-            x < self.width && y < self.height,
-            "pixel ({x}, {y}) outside a {}×{} image",
-            self.width,
-            self.height
-        );
+        assert!(x < self.width && y < self.height, "pixel ({x}, {y}) outside a {}×{} image", self.width, self.height);
         self.pixels[y * self.width + x] = c;
     }
 
@@ -121,10 +103,7 @@ pub enum Format {
 impl Format {
     /// The format for `path`'s extension (any case), or a usage error naming the allowed extensions.
     pub fn from_path(path: &Path) -> Result<Format> {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
         match ext.as_deref() {
             Some("exr") => Ok(Format::Exr),
             Some("pfm") => Ok(Format::Pfm),
@@ -157,12 +136,7 @@ pub fn write(image: &Image, path: &Path) -> Result<()> {
     if image.width == 0 || image.height == 0 || image.pixels.len() != image.width * image.height {
         return Err(Error::file(
             path,
-            format!(
-                "cannot write a {}×{} image with {} pixels",
-                image.width,
-                image.height,
-                image.pixels.len()
-            ),
+            format!("cannot write a {}×{} image with {} pixels", image.width, image.height, image.pixels.len()),
         ));
     }
     atomic::write_atomically(path, |out| match format {
@@ -206,10 +180,7 @@ mod tests {
 
     #[test]
     fn formats_come_from_extensions() {
-        assert_eq!(
-            Format::from_path(Path::new("a/b.EXR")).unwrap(),
-            Format::Exr
-        );
+        assert_eq!(Format::from_path(Path::new("a/b.EXR")).unwrap(), Format::Exr);
         assert_eq!(Format::from_path(Path::new("b.pfm")).unwrap(), Format::Pfm);
         assert_eq!(Format::from_path(Path::new("b.png")).unwrap(), Format::Png);
         let e = Format::from_path(Path::new("b.jpg")).unwrap_err();

@@ -20,23 +20,17 @@ pub(crate) fn decode(bytes: &[u8]) -> Result<Image, String> {
         b"Pf" => 1,
         _ => {
             let shown = String::from_utf8_lossy(&magic[..magic.len().min(8)]).into_owned();
-            return Err(format!(
-                "not a PFM file: starts with {shown:?}, expected \"PF\" or \"Pf\""
-            ));
+            return Err(format!("not a PFM file: starts with {shown:?}, expected \"PF\" or \"Pf\""));
         }
     };
     let width = header.number::<usize>("width")?;
     let height = header.number::<usize>("height")?;
     let scale = header.number::<f32>("scale")?;
     if width == 0 || height == 0 {
-        return Err(format!(
-            "bad PFM header: size {width}×{height} has no pixels"
-        ));
+        return Err(format!("bad PFM header: size {width}×{height} has no pixels"));
     }
     if scale == 0.0 || !scale.is_finite() {
-        return Err(format!(
-            "bad PFM header: scale {scale} must be a non-zero finite number"
-        ));
+        return Err(format!("bad PFM header: scale {scale} must be a non-zero finite number"));
     }
     // Exactly one whitespace byte separates the header from the data.
     match bytes.get(header.pos) {
@@ -57,28 +51,15 @@ pub(crate) fn decode(bytes: &[u8]) -> Result<Image, String> {
     let little_endian = scale < 0.0;
     let factor = scale.abs();
     let value = |i: usize| {
-        let b: [u8; 4] = [
-            data[4 * i],
-            data[4 * i + 1],
-            data[4 * i + 2],
-            data[4 * i + 3],
-        ];
-        let v = if little_endian {
-            f32::from_le_bytes(b)
-        } else {
-            f32::from_be_bytes(b)
-        };
+        let b: [u8; 4] = [data[4 * i], data[4 * i + 1], data[4 * i + 2], data[4 * i + 3]];
+        let v = if little_endian { f32::from_le_bytes(b) } else { f32::from_be_bytes(b) };
         if factor == 1.0 { v } else { v * factor }
     };
     let mut image = Image::new(width, height);
     for (file_row, chunk) in image.pixels.chunks_mut(width).rev().enumerate() {
         for (x, p) in chunk.iter_mut().enumerate() {
             let i = (file_row * width + x) * channels;
-            *p = if channels == 3 {
-                [value(i), value(i + 1), value(i + 2)]
-            } else {
-                [value(i); 3]
-            };
+            *p = if channels == 3 { [value(i), value(i + 1), value(i + 2)] } else { [value(i); 3] };
         }
     }
     Ok(image)
@@ -114,10 +95,7 @@ impl<'a> Header<'a> {
             self.pos += 1;
         }
         let start = self.pos;
-        while self.pos < self.bytes.len()
-            && !self.bytes[self.pos].is_ascii_whitespace()
-            && self.pos - start < 64
-        {
+        while self.pos < self.bytes.len() && !self.bytes[self.pos].is_ascii_whitespace() && self.pos - start < 64 {
             self.pos += 1;
         }
         Some(&self.bytes[start..self.pos])
@@ -125,16 +103,9 @@ impl<'a> Header<'a> {
 
     /// The next token parsed as a `T`, or a message naming the header field.
     fn number<T: std::str::FromStr>(&mut self, what: &str) -> Result<T, String> {
-        let token = self
-            .token()
-            .ok_or_else(|| format!("bad PFM header: missing {what}"))?;
+        let token = self.token().ok_or_else(|| format!("bad PFM header: missing {what}"))?;
         let text = std::str::from_utf8(token).unwrap_or("");
-        text.parse().map_err(|_| {
-            format!(
-                "bad PFM header: {what} {:?} is not a number",
-                String::from_utf8_lossy(token)
-            )
-        })
+        text.parse().map_err(|_| format!("bad PFM header: {what} {:?} is not a number", String::from_utf8_lossy(token)))
     }
 }
 
@@ -162,21 +133,10 @@ mod tests {
         assert_eq!(decode(&bytes).unwrap(), sample());
     }
 
-    fn handmade(
-        magic: &str,
-        scale: &str,
-        values: &[f32],
-        big_endian: bool,
-        w: usize,
-        h: usize,
-    ) -> Vec<u8> {
+    fn handmade(magic: &str, scale: &str, values: &[f32], big_endian: bool, w: usize, h: usize) -> Vec<u8> {
         let mut b = format!("{magic}\n{w} {h}\n{scale}\n").into_bytes();
         for v in values {
-            b.extend_from_slice(&if big_endian {
-                v.to_be_bytes()
-            } else {
-                v.to_le_bytes()
-            });
+            b.extend_from_slice(&if big_endian { v.to_be_bytes() } else { v.to_le_bytes() });
         }
         b
     }

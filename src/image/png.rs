@@ -15,20 +15,12 @@ use crate::error::{Error, Result};
 
 /// The sRGB transfer curve, encoded value → linear (IEC 61966-2-1).
 pub fn srgb_to_linear(v: f32) -> f32 {
-    if v <= 0.04045 {
-        v / 12.92
-    } else {
-        ((v + 0.055) / 1.055).powf(2.4)
-    }
+    if v <= 0.04045 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
 }
 
 /// The inverse sRGB transfer curve, linear → encoded value (IEC 61966-2-1).
 pub fn linear_to_srgb(v: f32) -> f32 {
-    if v <= 0.0031308 {
-        v * 12.92
-    } else {
-        1.055 * v.powf(1.0 / 2.4) - 0.055
-    }
+    if v <= 0.0031308 { v * 12.92 } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
 }
 
 /// Linear → 8-bit sRGB code value, clamping to [0, 1] first (NaN becomes 0).
@@ -43,18 +35,9 @@ pub(crate) fn decode(bytes: &[u8]) -> std::result::Result<Image, String> {
         .map_err(|e| format!("cannot decode PNG: {e}"))?;
     let rgb = decoded.to_rgb32f();
     let (width, height) = (rgb.width() as usize, rgb.height() as usize);
-    let pixels = rgb
-        .pixels()
-        .map(|p| {
-            [
-                srgb_to_linear(p.0[0]),
-                srgb_to_linear(p.0[1]),
-                srgb_to_linear(p.0[2]),
-            ]
-        })
-        .collect();
-    Image::from_pixels(width, height, pixels)
-        .ok_or_else(|| "PNG decoder returned a wrong pixel count".into())
+    let pixels =
+        rgb.pixels().map(|p| [srgb_to_linear(p.0[0]), srgb_to_linear(p.0[1]), srgb_to_linear(p.0[2])]).collect();
+    Image::from_pixels(width, height, pixels).ok_or_else(|| "PNG decoder returned a wrong pixel count".into())
 }
 
 /// Encodes `image` as an 8-bit sRGB PNG.
@@ -64,12 +47,7 @@ pub(crate) fn encode(image: &Image, out: &mut impl Write) -> std::result::Result
 }
 
 /// Encodes ready-made 8-bit RGB bytes (row-major, top row first) as a PNG.
-fn encode_rgb8(
-    width: usize,
-    height: usize,
-    rgb: &[u8],
-    out: &mut impl Write,
-) -> std::result::Result<(), String> {
+fn encode_rgb8(width: usize, height: usize, rgb: &[u8], out: &mut impl Write) -> std::result::Result<(), String> {
     let (w, h) = match (u32::try_from(width), u32::try_from(height)) {
         (Ok(w), Ok(h)) => (w, h),
         _ => return Err(format!("{width}×{height} is too large for PNG")),
@@ -83,19 +61,10 @@ fn encode_rgb8(
 /// row from the top. Atomic like [`super::write`]; the path must end in `.png`.
 pub fn write_rgb8_png(width: usize, height: usize, rgb: &[[u8; 3]], path: &Path) -> Result<()> {
     if super::Format::from_path(path)? != super::Format::Png {
-        return Err(Error::usage(format!(
-            "\"{}\": a colour map is written as .png",
-            path.display()
-        )));
+        return Err(Error::usage(format!("\"{}\": a colour map is written as .png", path.display())));
     }
     if width == 0 || height == 0 || width.checked_mul(height) != Some(rgb.len()) {
-        return Err(Error::file(
-            path,
-            format!(
-                "cannot write {} colours as a {width}×{height} image",
-                rgb.len()
-            ),
-        ));
+        return Err(Error::file(path, format!("cannot write {} colours as a {width}×{height} image", rgb.len())));
     }
     let bytes: Vec<u8> = rgb.iter().flatten().copied().collect();
     super::atomic::write_atomically(path, |out| encode_rgb8(width, height, &bytes, out))

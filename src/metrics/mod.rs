@@ -79,17 +79,10 @@ impl FromStr for Metric {
     /// A metric from its name (any case), or a usage error listing the valid names.
     fn from_str(s: &str) -> Result<Metric> {
         let wanted = s.trim().to_ascii_lowercase();
-        Metric::ALL
-            .into_iter()
-            .find(|m| m.name() == wanted)
-            .ok_or_else(|| {
-                let names: Vec<&str> = Metric::ALL.iter().map(|m| m.name()).collect();
-                Error::usage(format!(
-                    "unknown metric \"{}\"; valid metrics: {}",
-                    s.trim(),
-                    names.join(", ")
-                ))
-            })
+        Metric::ALL.into_iter().find(|m| m.name() == wanted).ok_or_else(|| {
+            let names: Vec<&str> = Metric::ALL.iter().map(|m| m.name()).collect();
+            Error::usage(format!("unknown metric \"{}\"; valid metrics: {}", s.trim(), names.join(", ")))
+        })
     }
 }
 
@@ -121,11 +114,7 @@ pub fn compare(test: &Image, reference: &Image, metrics: &[Metric]) -> Result<Ve
 /// Like [`compare`], and keeps the FLIP maps for pictures.
 pub fn evaluate(test: &Image, reference: &Image, metrics: &[Metric]) -> Result<Evaluation> {
     check_inputs(test, reference)?;
-    let mut eval = Evaluation {
-        values: Vec::new(),
-        hdr_flip: None,
-        ldr_flip: None,
-    };
+    let mut eval = Evaluation { values: Vec::new(), hdr_flip: None, ldr_flip: None };
     for &m in metrics {
         let value = match m {
             Metric::Rmse => rmse(test, reference)?,
@@ -170,9 +159,7 @@ pub(crate) fn check_sizes(test: &Image, reference: &Image) -> Result<()> {
     }
     let n = reference.width * reference.height;
     if n == 0 || test.pixels.len() != n || reference.pixels.len() != n {
-        return Err(Error::usage(
-            "images must be non-empty and hold width × height pixels",
-        ));
+        return Err(Error::usage("images must be non-empty and hold width × height pixels"));
     }
     Ok(())
 }
@@ -189,31 +176,20 @@ mod tests {
         }
         assert_eq!(" FLIP ".parse::<Metric>().unwrap(), Metric::Flip);
         let e = "psnr".parse::<Metric>().unwrap_err().to_string();
-        assert!(
-            e.contains("\"psnr\"") && e.contains("rmse, relmse, flip, ldrflip"),
-            "{e}"
-        );
-        assert_eq!(
-            Metric::parse_list("rmse, flip,rmse").unwrap(),
-            vec![Metric::Rmse, Metric::Flip]
-        );
+        assert!(e.contains("\"psnr\"") && e.contains("rmse, relmse, flip, ldrflip"), "{e}");
+        assert_eq!(Metric::parse_list("rmse, flip,rmse").unwrap(), vec![Metric::Rmse, Metric::Flip]);
         assert!(Metric::parse_list("rmse,").is_err());
     }
 
     #[test]
     fn compare_checks_inputs() {
         let a = Image::new(3, 3);
-        let e = compare(&a, &Image::new(3, 4), &[Metric::Rmse])
-            .unwrap_err()
-            .to_string();
+        let e = compare(&a, &Image::new(3, 4), &[Metric::Rmse]).unwrap_err().to_string();
         assert!(e.contains("3×3 but the reference is 3×4"), "{e}");
         let mut r = Image::new(3, 3);
         r.set(1, 2, [0.0, 0.0, f32::INFINITY]);
         let e = compare(&a, &r, &[Metric::Rmse]).unwrap_err().to_string();
-        assert!(
-            e.contains("pixel (1, 2)") && e.contains("channel B") && e.contains("inf"),
-            "{e}"
-        );
+        assert!(e.contains("pixel (1, 2)") && e.contains("channel B") && e.contains("inf"), "{e}");
         // A non-finite *test* value is not an error: it shows up in the numbers.
         assert!(compare(&r, &a, &[Metric::Rmse]).unwrap()[0].1.is_infinite());
     }
@@ -223,17 +199,9 @@ mod tests {
         let r = Image::from_pixels(2, 2, vec![[0.5; 3]; 4]).unwrap();
         let mut t = r.clone();
         t.set(0, 0, [0.6; 3]);
-        let v = compare(
-            &t,
-            &r,
-            &[Metric::LdrFlip, Metric::Rmse, Metric::Flip, Metric::RelMse],
-        )
-        .unwrap();
+        let v = compare(&t, &r, &[Metric::LdrFlip, Metric::Rmse, Metric::Flip, Metric::RelMse]).unwrap();
         let names: Vec<Metric> = v.iter().map(|p| p.0).collect();
-        assert_eq!(
-            names,
-            vec![Metric::LdrFlip, Metric::Rmse, Metric::Flip, Metric::RelMse]
-        );
+        assert_eq!(names, vec![Metric::LdrFlip, Metric::Rmse, Metric::Flip, Metric::RelMse]);
         assert!((v[1].1 - (0.01f64 * 3.0 / 12.0).sqrt()).abs() < 1e-6);
         assert!(v.iter().all(|p| p.1 > 0.0));
     }

@@ -21,17 +21,11 @@ pub fn rmse(test: &Image, reference: &Image) -> Result<f64> {
 /// Relative mean squared error: mean over pixels and channels of (test − reference)² / (reference² + ε),
 /// with ε = [`RELMSE_EPSILON`] = 10⁻².
 pub fn relmse(test: &Image, reference: &Image) -> Result<f64> {
-    mean_over_channels(test, reference, |t, r| {
-        (t - r) * (t - r) / (r * r + RELMSE_EPSILON)
-    })
+    mean_over_channels(test, reference, |t, r| (t - r) * (t - r) / (r * r + RELMSE_EPSILON))
 }
 
 /// Mean of `f(test, reference)` over all channel values, in f64, reduced per row then over rows in order.
-fn mean_over_channels(
-    test: &Image,
-    reference: &Image,
-    f: impl Fn(f64, f64) -> f64 + Sync,
-) -> Result<f64> {
+fn mean_over_channels(test: &Image, reference: &Image, f: impl Fn(f64, f64) -> f64 + Sync) -> Result<f64> {
     super::check_sizes(test, reference)?;
     let width = reference.width;
     let rows: Vec<f64> = test
@@ -80,10 +74,7 @@ mod tests {
     #[test]
     fn size_mismatch_is_an_error() {
         let e = rmse(&Image::new(3, 2), &Image::new(2, 3)).unwrap_err();
-        assert!(
-            e.to_string().contains("3×2 but the reference is 2×3"),
-            "{e}"
-        );
+        assert!(e.to_string().contains("3×2 but the reference is 2×3"), "{e}");
         assert!(rmse(&Image::new(0, 0), &Image::new(0, 0)).is_err());
     }
 }

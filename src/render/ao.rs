@@ -47,12 +47,16 @@ impl AmbientOcclusion {
         let n = p.int_or("nsamples", 64)?;
         if !(1..=MAX_AO_SAMPLES).contains(&n) {
             let loc = p.loc_of("nsamples").map(|l| l.to_string() + ": ").unwrap_or_default();
-            return Err(Error::usage(format!("{loc}ambientocclusion: \"nsamples\" must be between 1 and {MAX_AO_SAMPLES}, got {n}")));
+            return Err(Error::usage(format!(
+                "{loc}ambientocclusion: \"nsamples\" must be between 1 and {MAX_AO_SAMPLES}, got {n}"
+            )));
         }
         let max_distance = p.float_or("maxdistance", f64::INFINITY)? as f32;
         if !(max_distance > 0.0) {
             let loc = p.loc_of("maxdistance").map(|l| l.to_string() + ": ").unwrap_or_default();
-            return Err(Error::usage(format!("{loc}ambientocclusion: \"maxdistance\" must be positive, got {max_distance}")));
+            return Err(Error::usage(format!(
+                "{loc}ambientocclusion: \"maxdistance\" must be positive, got {max_distance}"
+            )));
         }
         let n = if quick { 1 } else { sampler.round_count(n as u32) };
         Ok(AmbientOcclusion { n_samples: n, cos_sample: p.bool_or("cossample", true)?, max_distance })
@@ -60,7 +64,14 @@ impl AmbientOcclusion {
 
     /// AO at a surface point seen along `wo_dir` (the incoming ray direction), with `u` one 2-D sample per
     /// direction. Returns Σ cos θ / (pdf · n).
-    pub fn occlusion(&self, scene: &Scene, si: &crate::scene::geometry::SurfaceInteraction, ray_dir: Vec3A, u: &[[f32; 2]], counters: &mut RayCounters) -> f32 {
+    pub fn occlusion(
+        &self,
+        scene: &Scene,
+        si: &crate::scene::geometry::SurfaceInteraction,
+        ray_dir: Vec3A,
+        u: &[[f32; 2]],
+        counters: &mut RayCounters,
+    ) -> f32 {
         let n = if si.ng.dot(-ray_dir) < 0.0 { -si.ng } else { si.ng };
         let frame = Frame::from_normal(n);
         let inv_n = 1.0 / u.len() as f32;
@@ -87,7 +98,14 @@ impl AmbientOcclusion {
 }
 
 impl PixelIntegrator for AmbientOcclusion {
-    fn li(&self, scene: &Scene, mut ray: Ray, s: &mut PixelSamples, scratch: &mut Vec<[f32; 2]>, c: &mut RayCounters) -> [f32; 3] {
+    fn li(
+        &self,
+        scene: &Scene,
+        mut ray: Ray,
+        s: &mut PixelSamples,
+        scratch: &mut Vec<[f32; 2]>,
+        c: &mut RayCounters,
+    ) -> [f32; 3] {
         for _ in 0..MAX_PASS_THROUGH {
             c.camera += 1;
             let Some(si) = scene.geometry.intersect(&ray) else { return [0.0; 3] };

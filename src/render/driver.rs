@@ -19,7 +19,13 @@ const TILE: i32 = 16;
 
 /// Renders `scene` with `integrator`, `sampler.spp` samples per pixel; returns the image, the rays traced
 /// and the wall time. Identical output for any thread count.
-pub fn render_image(scene: &Scene, sampler: &SamplerSpec, integrator: &dyn PixelIntegrator, seed: u64, progress: bool) -> (Image, RayCounters, f64) {
+pub fn render_image(
+    scene: &Scene,
+    sampler: &SamplerSpec,
+    integrator: &dyn PixelIntegrator,
+    seed: u64,
+    progress: bool,
+) -> (Image, RayCounters, f64) {
     let start = Instant::now();
     let image_px = scene.film.cropped_bounds();
     let sample_px = scene.film.sample_bounds(scene.filter.radius);
@@ -57,7 +63,14 @@ fn tiles(b: &PixelBounds) -> Vec<PixelBounds> {
     out
 }
 
-fn render_tile(scene: &Scene, sampler: &SamplerSpec, integrator: &dyn PixelIntegrator, seed: u64, t: &PixelBounds, image: &PixelBounds) -> (FilmTile, RayCounters) {
+fn render_tile(
+    scene: &Scene,
+    sampler: &SamplerSpec,
+    integrator: &dyn PixelIntegrator,
+    seed: u64,
+    t: &PixelBounds,
+    image: &PixelBounds,
+) -> (FilmTile, RayCounters) {
     let mut tile = FilmTile::new(*t, &scene.filter, image);
     let mut samples = PixelSamples::new(sampler, seed);
     let mut scratch = Vec::new();
@@ -91,7 +104,9 @@ fn progress_bar(show: bool, n: u64) -> ProgressBar {
         return ProgressBar::hidden();
     }
     let bar = ProgressBar::new(n);
-    if let Ok(style) = ProgressStyle::with_template("{spinner} rendering [{bar:40}] {percent}% {elapsed_precise} (eta {eta})") {
+    if let Ok(style) =
+        ProgressStyle::with_template("{spinner} rendering [{bar:40}] {percent}% {elapsed_precise} (eta {eta})")
+    {
         bar.set_style(style.progress_chars("=> "));
     }
     bar

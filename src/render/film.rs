@@ -16,7 +16,9 @@ pub struct FilmTile {
 impl FilmTile {
     /// A tile for the samples of `sample_px` (its pixel rectangle grown by the filter radius, clipped to `image`).
     pub fn new(sample_px: PixelBounds, filter: &Filter, image: &PixelBounds) -> Self {
-        let grow = |v: i32, r: f32, up: bool| if up { (v as f32 - 0.5 + r).ceil() as i32 } else { (v as f32 + 0.5 - r).floor() as i32 };
+        let grow = |v: i32, r: f32, up: bool| {
+            if up { (v as f32 - 0.5 + r).ceil() as i32 } else { (v as f32 + 0.5 - r).floor() as i32 }
+        };
         let bounds = PixelBounds {
             min: [0, 1].map(|i| grow(sample_px.min[i], filter.radius[i], false).max(image.min[i])),
             max: [0, 1].map(|i| grow(sample_px.max[i], filter.radius[i], true).min(image.max[i])),

@@ -42,7 +42,14 @@ impl RayCounters {
 /// An integrator that estimates the radiance along one camera ray.
 pub trait PixelIntegrator: Sync {
     /// Radiance along `ray`, drawing sample values from `s`; `scratch` is reusable per-thread storage.
-    fn li(&self, scene: &Scene, ray: Ray, s: &mut PixelSamples, scratch: &mut Vec<[f32; 2]>, counters: &mut RayCounters) -> [f32; 3];
+    fn li(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        s: &mut PixelSamples,
+        scratch: &mut Vec<[f32; 2]>,
+        counters: &mut RayCounters,
+    ) -> [f32; 3];
 }
 
 /// How to render, beyond what the scene file says.
@@ -81,7 +88,12 @@ pub struct RenderOutput {
 pub const INTEGRATORS: [&str; 1] = ["ambientocclusion"];
 
 /// Builds the integrator named by the scene (or by `settings.integrator`) and renders.
-pub fn render(scene: &Scene, integrator: Option<&Named>, settings: &RenderSettings, warnings: &mut Warnings) -> Result<RenderOutput> {
+pub fn render(
+    scene: &Scene,
+    integrator: Option<&Named>,
+    settings: &RenderSettings,
+    warnings: &mut Warnings,
+) -> Result<RenderOutput> {
     let empty = ParamList::default();
     let scene_name = integrator.map_or("path", |n| n.name.as_str());
     let name = settings.integrator.as_deref().unwrap_or(scene_name);

@@ -90,18 +90,24 @@ mod tests {
 
     #[test]
     fn same_key_same_numbers_different_key_different_numbers() {
-        let a: Vec<u32> = (0..8).map({
-            let mut r = Rng::keyed(1, 2, 3);
-            move |_| r.next_u32()
-        }).collect();
-        let b: Vec<u32> = (0..8).map({
-            let mut r = Rng::keyed(1, 2, 3);
-            move |_| r.next_u32()
-        }).collect();
-        let c: Vec<u32> = (0..8).map({
-            let mut r = Rng::keyed(1, 2, 4);
-            move |_| r.next_u32()
-        }).collect();
+        let a: Vec<u32> = (0..8)
+            .map({
+                let mut r = Rng::keyed(1, 2, 3);
+                move |_| r.next_u32()
+            })
+            .collect();
+        let b: Vec<u32> = (0..8)
+            .map({
+                let mut r = Rng::keyed(1, 2, 3);
+                move |_| r.next_u32()
+            })
+            .collect();
+        let c: Vec<u32> = (0..8)
+            .map({
+                let mut r = Rng::keyed(1, 2, 4);
+                move |_| r.next_u32()
+            })
+            .collect();
         assert_eq!(a, b);
         assert_ne!(a, c);
     }

@@ -12,11 +12,7 @@ pub fn concentric_disk(u: [f32; 2]) -> [f32; 2] {
     if a == 0.0 && b == 0.0 {
         return [0.0, 0.0];
     }
-    let (r, theta) = if a.abs() > b.abs() {
-        (a, FRAC_PI_4 * (b / a))
-    } else {
-        (b, FRAC_PI_2 - FRAC_PI_4 * (a / b))
-    };
+    let (r, theta) = if a.abs() > b.abs() { (a, FRAC_PI_4 * (b / a)) } else { (b, FRAC_PI_2 - FRAC_PI_4 * (a / b)) };
     [r * theta.cos(), r * theta.sin()]
 }
 

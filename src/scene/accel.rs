@@ -112,13 +112,20 @@ impl Level {
                 PrimRef::Instance(i) => instance_box(i),
             })
             .collect();
-        let kept: Vec<(usize, (Vec3A, Vec3A))> =
-            boxes.iter().enumerate().filter_map(|(i, b)| b.filter(|(lo, hi)| lo.is_finite() && hi.is_finite()).map(|b| (i, b))).collect();
+        let kept: Vec<(usize, (Vec3A, Vec3A))> = boxes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, b)| b.filter(|(lo, hi)| lo.is_finite() && hi.is_finite()).map(|b| (i, b)))
+            .collect();
         if kept.is_empty() {
             return Level::default();
         }
         let aabbs: Vec<Boxed> = kept.iter().map(|(_, (lo, hi))| Boxed(Aabb::new(*lo, *hi))).collect();
-        let bounds = kept.iter().fold((Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)), |(lo, hi), (_, (a, b))| (lo.min(*a), hi.max(*b)));
+        let bounds = kept
+            .iter()
+            .fold((Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)), |(lo, hi), (_, (a, b))| {
+                (lo.min(*a), hi.max(*b))
+            });
         let bvh = build_cwbvh(&aabbs, BvhBuildParams::medium_build(), &mut Duration::default());
         let items = bvh
             .primitive_indices
@@ -155,9 +162,15 @@ pub struct Accel {
 impl Accel {
     /// Builds one BVH per object definition (in parallel; each build is deterministic) and the top BVH
     /// over `top` (world triangles, analytic shapes and instances).
-    pub fn build(top: Vec<BuildPrim>, objects: Vec<Vec<BuildPrim>>, instances: Vec<InstanceXf>, quadrics: Vec<Quadric>) -> Accel {
+    pub fn build(
+        top: Vec<BuildPrim>,
+        objects: Vec<Vec<BuildPrim>>,
+        instances: Vec<InstanceXf>,
+        quadrics: Vec<Quadric>,
+    ) -> Accel {
         let no_instances = |_| None;
-        let objects: Vec<Level> = objects.par_iter().map(|prims| Level::build(prims, &quadrics, &no_instances)).collect();
+        let objects: Vec<Level> =
+            objects.par_iter().map(|prims| Level::build(prims, &quadrics, &no_instances)).collect();
         let instance_box = |i: u32| {
             let inst = instances.get(i as usize)?;
             let (lo, hi) = objects.get(inst.object as usize)?.bounds?;
@@ -208,13 +221,9 @@ impl Accel {
                     b: [b1, b2],
                     quadric_p: DVec3::ZERO,
                 }),
-                PrimRef::Quadric(q) => self.quadrics[q as usize].intersect(&Ray { t_max: r.tmax, ..*ray }).map(|h| Hit {
-                    t: h.t,
-                    prim: it.r,
-                    instance: None,
-                    b: [0.0; 2],
-                    quadric_p: h.p,
-                }),
+                PrimRef::Quadric(q) => self.quadrics[q as usize]
+                    .intersect(&Ray { t_max: r.tmax, ..*ray })
+                    .map(|h| Hit { t: h.t, prim: it.r, instance: None, b: [0.0; 2], quadric_p: h.p }),
                 PrimRef::Instance(i) => {
                     let inst = &self.instances[i as usize];
                     let local = Ray {

@@ -45,13 +45,20 @@ pub struct Camera {
 
 impl Camera {
     /// Builds the camera of a `Camera` directive; `world_from_camera` is the inverse of the CTM at it.
-    pub fn from_directive(d: &Named, world_from_camera: &Transform, film: &FilmSpec, warnings: &mut Warnings) -> Result<Camera> {
+    pub fn from_directive(
+        d: &Named,
+        world_from_camera: &Transform,
+        film: &FilmSpec,
+        warnings: &mut Warnings,
+    ) -> Result<Camera> {
         let p = &d.params;
-        let world_from_camera = world_from_camera.to_affine().map_err(|e| Error::at(&d.name_loc, format!("camera transform: {e}")))?;
+        let world_from_camera =
+            world_from_camera.to_affine().map_err(|e| Error::at(&d.name_loc, format!("camera transform: {e}")))?;
         let open = p.float_or("shutteropen", 0.0)?;
         let close = p.float_or("shutterclose", 1.0)?;
         if close < open {
-            warnings.at(&d.name_loc, "shutterclose < shutteropen; cachert renders a static scene, so this has no effect");
+            warnings
+                .at(&d.name_loc, "shutterclose < shutteropen; cachert renders a static scene, so this has no effect");
         }
         let [rx, ry] = film.resolution.map(|r| r as f32);
         let frame = p.float_or("frameaspectratio", (rx / ry) as f64)? as f32;
@@ -75,7 +82,10 @@ impl Camera {
                 let lr = p.float_or("lensradius", 0.0)? as f32;
                 let fd = p.float_or("focaldistance", 1e6)? as f32;
                 if !(lr >= 0.0 && lr.is_finite()) || !(fd > 0.0 && fd.is_finite()) {
-                    return Err(Error::at(&d.name_loc, format!("lensradius {lr} / focaldistance {fd}: need lensradius ≥ 0 and focaldistance > 0")));
+                    return Err(Error::at(
+                        &d.name_loc,
+                        format!("lensradius {lr} / focaldistance {fd}: need lensradius ≥ 0 and focaldistance > 0"),
+                    ));
                 }
                 (lr, fd)
             }
@@ -97,10 +107,16 @@ impl Camera {
             "orthographic" => Projection::Orthographic,
             "environment" => Projection::Environment,
             "realistic" => {
-                return Err(Error::at(&d.name_loc, "camera \"realistic\" (lens systems) is not supported by cachert; use perspective"));
+                return Err(Error::at(
+                    &d.name_loc,
+                    "camera \"realistic\" (lens systems) is not supported by cachert; use perspective",
+                ));
             }
             other => {
-                return Err(Error::at(&d.name_loc, format!("unknown camera \"{other}\"; expected perspective, orthographic or environment")));
+                return Err(Error::at(
+                    &d.name_loc,
+                    format!("unknown camera \"{other}\"; expected perspective, orthographic or environment"),
+                ));
             }
         };
         Ok(Camera { projection, world_from_camera, screen, resolution: [rx, ry], lens_radius, focal_distance })

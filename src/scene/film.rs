@@ -75,11 +75,15 @@ impl FilmSpec {
         let loc = |name: &str| p.loc_of(name).unwrap_or(&d.name_loc).clone();
         let x = p.int_or("xresolution", 1280)?;
         let y = p.int_or("yresolution", 720)?;
-        f.resolution = [check_res(x, &loc("xresolution"), "xresolution")?, check_res(y, &loc("yresolution"), "yresolution")?];
+        f.resolution =
+            [check_res(x, &loc("xresolution"), "xresolution")?, check_res(y, &loc("yresolution"), "yresolution")?];
         check_memory(f.resolution, &d.name_loc)?;
         if let Some(cw) = p.floats("cropwindow")? {
             if cw.len() != 4 || cw.iter().any(|v| !v.is_finite()) {
-                return Err(Error::at(&loc("cropwindow"), format!("cropwindow needs 4 finite numbers, got {}", cw.len())));
+                return Err(Error::at(
+                    &loc("cropwindow"),
+                    format!("cropwindow needs 4 finite numbers, got {}", cw.len()),
+                ));
             }
             let c = |v: f64| v.clamp(0.0, 1.0);
             f.crop = [c(cw[0].min(cw[1])), c(cw[0].max(cw[1])), c(cw[2].min(cw[3])), c(cw[2].max(cw[3]))];

@@ -81,10 +81,9 @@ impl Filter {
                 let alpha = p.float_or("alpha", 2.0)? as f32;
                 FilterKind::Gaussian { alpha, exp_x: (-alpha * rx * rx).exp(), exp_y: (-alpha * ry * ry).exp() }
             }
-            "mitchell" => FilterKind::Mitchell {
-                b: p.float_or("B", 1.0 / 3.0)? as f32,
-                c: p.float_or("C", 1.0 / 3.0)? as f32,
-            },
+            "mitchell" => {
+                FilterKind::Mitchell { b: p.float_or("B", 1.0 / 3.0)? as f32, c: p.float_or("C", 1.0 / 3.0)? as f32 }
+            }
             _ => FilterKind::Sinc { tau: p.float_or("tau", 3.0)? as f32 },
         };
         Ok(Filter { radius: [rx, ry], kind })

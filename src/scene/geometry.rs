@@ -162,10 +162,7 @@ fn triangle_interaction(mesh: &TriangleMesh, tri: usize, hit: &Hit) -> SurfaceIn
     if dpdu.cross(ng).length_squared() == 0.0 {
         dpdu = crate::sampling::Frame::from_normal(ng).s;
     }
-    let uv = [
-        b0 * uv0[0] + b1 * uv1[0] + b2 * uv2[0],
-        b0 * uv0[1] + b1 * uv1[1] + b2 * uv2[1],
-    ];
+    let uv = [b0 * uv0[0] + b1 * uv1[0] + b2 * uv2[0], b0 * uv0[1] + b1 * uv1[1] + b2 * uv2[1]];
     let mut ns = ng;
     if mesh.normals.is_empty() {
         if mesh.flip_normals {

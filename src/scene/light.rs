@@ -22,13 +22,16 @@ pub fn schema(name: &str) -> Option<&'static [(&'static str, Kind)]> {
         "goniometric" => &[("I", Spectrum), ("scale", Spectrum), ("mapname", File)],
         "projection" => &[("I", Spectrum), ("scale", Spectrum), ("fov", Float), ("mapname", File)],
         "distant" => &[("L", Spectrum), ("scale", Spectrum), ("from", Point3), ("to", Point3)],
-        "infinite" | "exinfinite" => &[("L", Spectrum), ("scale", Spectrum), ("nsamples", Int), ("samples", Int), ("mapname", File)],
+        "infinite" | "exinfinite" => {
+            &[("L", Spectrum), ("scale", Spectrum), ("nsamples", Int), ("samples", Int), ("mapname", File)]
+        }
         _ => return None,
     })
 }
 
 /// The parameters of an area light (`"diffuse"`, also accepted as `"area"`).
-pub const AREA_SCHEMA: &[(&str, Kind)] = &[("L", Spectrum), ("scale", Spectrum), ("twosided", Bool), ("nsamples", Int), ("samples", Int)];
+pub const AREA_SCHEMA: &[(&str, Kind)] =
+    &[("L", Spectrum), ("scale", Spectrum), ("twosided", Bool), ("nsamples", Int), ("samples", Int)];
 
 /// A light source that is not attached to a shape.
 #[derive(Clone, Debug, PartialEq)]

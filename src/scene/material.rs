@@ -73,7 +73,9 @@ impl MaterialKind {
         match self {
             M::None => &[],
             M::Matte => &[("Kd", SpectrumTex), ("sigma", FloatTex), BUMP],
-            M::Plastic => &[("Kd", SpectrumTex), ("Ks", SpectrumTex), ("roughness", FloatTex), ("remaproughness", Bool), BUMP],
+            M::Plastic => {
+                &[("Kd", SpectrumTex), ("Ks", SpectrumTex), ("roughness", FloatTex), ("remaproughness", Bool), BUMP]
+            }
             M::Translucent => &[
                 ("Kd", SpectrumTex),
                 ("Ks", SpectrumTex),

@@ -78,14 +78,19 @@ pub fn trianglemesh_params(params: &ParamList, loc: &SourceLoc, warnings: &mut W
     let indices: Vec<u32> = match params.ints("indices")? {
         Some(ix) => {
             if ix.len() % 3 != 0 {
-                return Err(Error::at(&at("indices"), format!("parameter \"indices\": {} values is not a multiple of 3", ix.len())));
+                return Err(Error::at(
+                    &at("indices"),
+                    format!("parameter \"indices\": {} values is not a multiple of 3", ix.len()),
+                ));
             }
             let mut out = Vec::with_capacity(ix.len());
             for (k, &v) in ix.iter().enumerate() {
                 if v < 0.0 || v >= nv as f64 {
                     return Err(Error::at(
                         &at("indices"),
-                        format!("parameter \"indices\": value {v} at position {k} is out of range: there are {nv} vertices"),
+                        format!(
+                            "parameter \"indices\": value {v} at position {k} is out of range: there are {nv} vertices"
+                        ),
                     ));
                 }
                 out.push(v as u32);
@@ -103,10 +108,14 @@ pub fn trianglemesh_params(params: &ParamList, loc: &SourceLoc, warnings: &mut W
     .map(|c| [c[0] as f32, c[1] as f32])
     .collect();
     if !uvs.is_empty() && uvs.len() != nv {
-        warnings.at(&at(if params.loc_of("uv").is_some() { "uv" } else { "st" }), format!("{} texture coordinates for {nv} vertices; ignoring them", uvs.len()));
+        warnings.at(
+            &at(if params.loc_of("uv").is_some() { "uv" } else { "st" }),
+            format!("{} texture coordinates for {nv} vertices; ignoring them", uvs.len()),
+        );
         uvs.clear();
     }
-    let mut normals: Vec<[f32; 3]> = params.normals("N")?.unwrap_or_default().into_iter().map(|n| n.map(|x| x as f32)).collect();
+    let mut normals: Vec<[f32; 3]> =
+        params.normals("N")?.unwrap_or_default().into_iter().map(|n| n.map(|x| x as f32)).collect();
     if !normals.is_empty() && normals.len() != nv {
         warnings.at(&at("N"), format!("{} normals for {nv} vertices; ignoring them", normals.len()));
         normals.clear();
@@ -115,12 +124,7 @@ pub fn trianglemesh_params(params: &ParamList, loc: &SourceLoc, warnings: &mut W
         warnings.at(&at("S"), "per-vertex tangents \"S\" are ignored (pbrt-v3 uses them only for shading frames)");
     }
     let _ = params.ints("faceIndices")?;
-    let mut data = MeshData {
-        positions: p.into_iter().map(|v| v.map(|x| x as f32)).collect(),
-        normals,
-        uvs,
-        indices,
-    };
+    let mut data = MeshData { positions: p.into_iter().map(|v| v.map(|x| x as f32)).collect(), normals, uvs, indices };
     if let Err(e) = data.validate() {
         return Err(Error::at(&at("P"), format!("trianglemesh: {e}")));
     }

@@ -123,7 +123,12 @@ pub fn load_str(text: &str, name: &Path, opts: LoadOptions) -> Result<LoadedScen
     build(directives, name, opts, stats)
 }
 
-fn build(directives: Vec<crate::parse::Directive>, path: &Path, opts: LoadOptions, stats: LoadStats) -> Result<LoadedScene> {
+fn build(
+    directives: Vec<crate::parse::Directive>,
+    path: &Path,
+    opts: LoadOptions,
+    stats: LoadStats,
+) -> Result<LoadedScene> {
     let t = Instant::now();
     let mut loaded = builder::SceneBuilder::new(opts).build(directives, path, stats)?;
     loaded.stats.build_secs = t.elapsed().as_secs_f64() - loaded.stats.bvh_secs;

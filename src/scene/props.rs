@@ -145,7 +145,9 @@ impl Capture<'_> {
                     Some(TexOr::Texture(t)) => self.texture(&t, name, true, params).map(Prop::FloatTexture),
                     None => None,
                 },
-                Kind::Spectrum => self.spectrum_file_fallback(params, name, |p| p.rgb(name))?.map(|c| Prop::Rgb(c.map(|x| x as f32))),
+                Kind::Spectrum => {
+                    self.spectrum_file_fallback(params, name, |p| p.rgb(name))?.map(|c| Prop::Rgb(c.map(|x| x as f32)))
+                }
                 Kind::Float => params.float(name)?.map(|v| Prop::Float(v as f32)),
                 Kind::Floats => params.floats(name)?.map(|v| Prop::Floats(v.iter().map(|&x| x as f32).collect())),
                 Kind::Int => params.int(name)?.map(Prop::Int),
@@ -170,9 +172,18 @@ impl Capture<'_> {
 
     /// Runs a colour lookup; a `spectrum` parameter naming a file that cannot be read (or a pbrt-v4 named
     /// spectrum) becomes a warning and leaves the value unset, so the type's default applies.
-    fn spectrum_file_fallback<T>(&mut self, params: &ParamList, name: &str, f: impl Fn(&ParamList) -> Result<Option<T>>) -> Result<Option<T>> {
+    fn spectrum_file_fallback<T>(
+        &mut self,
+        params: &ParamList,
+        name: &str,
+        f: impl Fn(&ParamList) -> Result<Option<T>>,
+    ) -> Result<Option<T>> {
         match f(params) {
-            Err(e) if params.iter().any(|p| p.name == name && p.ty == ParamType::Spectrum && matches!(p.value, ParamValue::Strings(_))) => {
+            Err(e)
+                if params.iter().any(|p| {
+                    p.name == name && p.ty == ParamType::Spectrum && matches!(p.value, ParamValue::Strings(_))
+                }) =>
+            {
                 let loc = params.loc_of(name).unwrap_or(self.loc);
                 let why = match e {
                     crate::error::Error::Scene { msg, .. } => msg,
@@ -192,7 +203,8 @@ impl Capture<'_> {
         }
         let loc = params.loc_of(param).unwrap_or(self.loc);
         let kind = if float { "float" } else { "spectrum" };
-        self.warnings.at(loc, format!("parameter \"{param}\": no {kind} texture named \"{tex}\"; using the default value"));
+        self.warnings
+            .at(loc, format!("parameter \"{param}\": no {kind} texture named \"{tex}\"; using the default value"));
         None
     }
 }

@@ -24,21 +24,9 @@ const PT: f32 = 0.95;
 /// Linear sRGB → CIE XYZ (D65), with the exact rational matrix the reference uses.
 pub(crate) fn linear_rgb_to_xyz(c: [f32; 3]) -> [f32; 3] {
     let m = [
-        [
-            10135552.0f32 / 24577794.0,
-            8788810.0f32 / 24577794.0,
-            4435075.0f32 / 24577794.0,
-        ],
-        [
-            2613072.0f32 / 12288897.0,
-            8788810.0f32 / 12288897.0,
-            887015.0f32 / 12288897.0,
-        ],
-        [
-            1425312.0f32 / 73733382.0,
-            8788810.0f32 / 73733382.0,
-            70074185.0f32 / 73733382.0,
-        ],
+        [10135552.0f32 / 24577794.0, 8788810.0f32 / 24577794.0, 4435075.0f32 / 24577794.0],
+        [2613072.0f32 / 12288897.0, 8788810.0f32 / 12288897.0, 887015.0f32 / 12288897.0],
+        [1425312.0f32 / 73733382.0, 8788810.0f32 / 73733382.0, 70074185.0f32 / 73733382.0],
     ];
     m.map(|r| r[0] * c[0] + r[1] * c[1] + r[2] * c[2])
 }
@@ -57,11 +45,7 @@ pub(crate) fn xyz_to_linear_rgb(c: [f32; 3]) -> [f32; 3] {
 /// CIE XYZ → YCxCz: like CIELAB but without the cube root, so it is linear and filtering in it is
 /// meaningful. Y ∈ [-16, 100] for colours in gamut.
 pub(crate) fn xyz_to_ycxcz(c: [f32; 3]) -> [f32; 3] {
-    let [x, y, z] = [
-        c[0] * INV_WHITE[0],
-        c[1] * INV_WHITE[1],
-        c[2] * INV_WHITE[2],
-    ];
+    let [x, y, z] = [c[0] * INV_WHITE[0], c[1] * INV_WHITE[1], c[2] * INV_WHITE[2]];
     [116.0 * y - 16.0, 500.0 * (x - y), 200.0 * (y - z)]
 }
 
@@ -86,17 +70,9 @@ pub(crate) fn xyz_to_lab(c: [f32; 3]) -> [f32; 3] {
     let factor = 1.0 / (3.0 * delta_square);
     let term = 4.0f32 / 29.0;
     let f = |v: f32| {
-        if v > delta_cube {
-            v.powf(1.0 / 3.0)
-        } else {
-            factor * v + term
-        }
+        if v > delta_cube { v.powf(1.0 / 3.0) } else { factor * v + term }
     };
-    let [x, y, z] = [
-        f(c[0] * INV_WHITE[0]),
-        f(c[1] * INV_WHITE[1]),
-        f(c[2] * INV_WHITE[2]),
-    ];
+    let [x, y, z] = [f(c[0] * INV_WHITE[0]), f(c[1] * INV_WHITE[1]), f(c[2] * INV_WHITE[2])];
     [116.0 * y - 16.0, 500.0 * (x - y), 200.0 * (y - z)]
 }
 
@@ -149,10 +125,7 @@ impl ColourScale {
         let green = clamped_rgb_to_hunt_lab([0.0, 1.0, 0.0]);
         let blue = clamped_rgb_to_hunt_lab([0.0, 0.0, 1.0]);
         let cmax = hyab(green, blue).powf(QC);
-        ColourScale {
-            cmax,
-            knee: PC * cmax,
-        }
+        ColourScale { cmax, knee: PC * cmax }
     }
 
     /// The largest distance, c_max.
@@ -165,11 +138,7 @@ impl ColourScale {
     /// mapped linearly onto [0, p_t) and the rest onto [p_t, 1].
     pub(crate) fn error(&self, reference: [f32; 3], test: [f32; 3]) -> f32 {
         let d = hyab(reference, test).powf(QC);
-        if d < self.knee {
-            d * (PT / self.knee)
-        } else {
-            PT + ((d - self.knee) / (self.cmax - self.knee)) * (1.0 - PT)
-        }
+        if d < self.knee { d * (PT / self.knee) } else { PT + ((d - self.knee) / (self.cmax - self.knee)) * (1.0 - PT) }
     }
 }
 
@@ -185,41 +154,22 @@ mod tests {
     fn white_and_black() {
         // sRGB white is the D65 white point; its YCxCz and Lab are (100, 0, 0).
         assert!(close(linear_rgb_to_xyz([1.0; 3]), WHITE, 1e-6));
-        assert!(close(
-            linear_rgb_to_ycxcz([1.0; 3]),
-            [100.0, 0.0, 0.0],
-            1e-4
-        ));
+        assert!(close(linear_rgb_to_ycxcz([1.0; 3]), [100.0, 0.0, 0.0], 1e-4));
         assert!(close(xyz_to_lab(WHITE), [100.0, 0.0, 0.0], 1e-4));
-        assert!(close(
-            linear_rgb_to_ycxcz([0.0; 3]),
-            [-16.0, 0.0, 0.0],
-            1e-6
-        ));
+        assert!(close(linear_rgb_to_ycxcz([0.0; 3]), [-16.0, 0.0, 0.0], 1e-6));
         assert!(close(xyz_to_lab([0.0; 3]), [0.0, 0.0, 0.0], 1e-5));
     }
 
     #[test]
     fn primaries_by_hand() {
         // Red's XYZ is the first matrix column: (10135552/24577794, 2613072/12288897, 1425312/73733382).
-        assert!(close(
-            linear_rgb_to_xyz([1.0, 0.0, 0.0]),
-            [0.412_386_6, 0.212_636_8, 0.019_330_6],
-            1e-6
-        ));
+        assert!(close(linear_rgb_to_xyz([1.0, 0.0, 0.0]), [0.412_386_6, 0.212_636_8, 0.019_330_6], 1e-6));
         // Its YCxCz: Y = 116·0.2126368 − 16 = 8.665871; Cx = 500·(0.4123866·1.0521569 − 0.2126368) =
         // 110.62928; Cz = 200·(0.2126368 − 0.0193306·0.9183577) = 38.97688.
-        assert!(close(
-            linear_rgb_to_ycxcz([1.0, 0.0, 0.0]),
-            [8.665_871, 110.629_28, 38.976_88],
-            1e-3
-        ));
+        assert!(close(linear_rgb_to_ycxcz([1.0, 0.0, 0.0]), [8.665_871, 110.629_28, 38.976_88], 1e-3));
         // Green's CIELAB: (87.7362, −86.1787, 83.1826).
         let green = xyz_to_lab(linear_rgb_to_xyz([0.0, 1.0, 0.0]));
-        assert!(
-            close(green, [87.7362, -86.1787, 83.1826], 1e-3),
-            "{green:?}"
-        );
+        assert!(close(green, [87.7362, -86.1787, 83.1826], 1e-3), "{green:?}");
     }
 
     #[test]

@@ -24,11 +24,7 @@ pub(crate) fn difference(reference: Lanes, test: Lanes) -> f32 {
     let point = |l: Lanes| (l[1] * l[1] + l[3] * l[3]).sqrt();
     let edge_difference = (edge(reference) - edge(test)).abs();
     let point_difference = (point(reference) - point(test)).abs();
-    let largest = if edge_difference > point_difference {
-        edge_difference
-    } else {
-        point_difference
-    };
+    let largest = if edge_difference > point_difference { edge_difference } else { point_difference };
     let normalisation = 1.0 / 2.0f32.sqrt();
     (normalisation * largest).powf(QF)
 }

@@ -92,8 +92,7 @@ pub(crate) fn spatial_kernel(ppd: f32) -> Kernel {
 fn feature_taps(ppd: f32) -> Vec<[f32; 3]> {
     let sigma = 0.5 * FEATURE_WIDTH * ppd;
     let radius = (3.0 * sigma).ceil() as i64;
-    let (mut g_sum, mut dg_pos, mut dg_neg, mut ddg_pos, mut ddg_neg) =
-        (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
+    let (mut g_sum, mut dg_pos, mut dg_neg, mut ddg_pos, mut ddg_neg) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
     let mut taps: Vec<[f32; 3]> = (-radius..=radius)
         .map(|i| {
             let x = i as f32;
@@ -132,16 +131,7 @@ pub(crate) fn feature_kernels(ppd: f32) -> (Kernel, Kernel) {
     let radius = taps.len() / 2;
     let horizontal = taps.iter().map(|&[g, dg, ddg]| [dg, ddg, g, g]).collect();
     let vertical = taps.iter().map(|&[g, dg, ddg]| [g, g, dg, ddg]).collect();
-    (
-        Kernel {
-            radius,
-            taps: horizontal,
-        },
-        Kernel {
-            radius,
-            taps: vertical,
-        },
-    )
+    (Kernel { radius, taps: horizontal }, Kernel { radius, taps: vertical })
 }
 
 /// Pixels filtered together. Their sums are independent, which keeps the floating-point units busy,
@@ -158,12 +148,7 @@ fn mul_add(acc: &mut Lanes, t: &Lanes, p: &Lanes) {
 
 /// Filters one row horizontally: `out[x] = Σ_k taps[k] · row[clamp(x + k − r)]`, lane by lane.
 /// `padded` is scratch space, reused between calls.
-pub(crate) fn horizontal(
-    row: &[Lanes],
-    kernel: &Kernel,
-    padded: &mut Vec<Lanes>,
-    out: &mut [Lanes],
-) {
+pub(crate) fn horizontal(row: &[Lanes], kernel: &Kernel, padded: &mut Vec<Lanes>, out: &mut [Lanes]) {
     let (w, r, n) = (row.len(), kernel.radius, kernel.taps.len());
     padded.clear();
     padded.extend((0..w + 2 * r).map(|i| row[(i.saturating_sub(r)).min(w - 1)]));
@@ -299,11 +284,7 @@ mod tests {
             }
             vertical(&plane, w, y, &k, &mut Vec::new(), &mut out);
             for x in 0..w {
-                assert_eq!(
-                    out[x],
-                    naive(&|d| plane[clamp(y as i64 + d, h) * w + x]),
-                    "v {x} {y}"
-                );
+                assert_eq!(out[x], naive(&|d| plane[clamp(y as i64 + d, h) * w + x]), "v {x} {y}");
             }
         }
     }
@@ -312,34 +293,19 @@ mod tests {
     fn tiny_ppd_gives_finite_weights() {
         for ppd in [0.01, 0.5, 1.0, 2.0] {
             let taps = feature_taps(ppd);
-            assert!(
-                taps.iter().flatten().all(|v| v.is_finite()),
-                "{ppd}: {taps:?}"
-            );
-            assert!(
-                spatial_kernel(ppd)
-                    .taps
-                    .iter()
-                    .flatten()
-                    .all(|v| v.is_finite())
-            );
+            assert!(taps.iter().flatten().all(|v| v.is_finite()), "{ppd}: {taps:?}");
+            assert!(spatial_kernel(ppd).taps.iter().flatten().all(|v| v.is_finite()));
         }
     }
 
     #[test]
     fn passes_clamp_edges_and_keep_constants() {
-        let k = Kernel {
-            radius: 1,
-            taps: vec![[0.25; 4], [0.5; 4], [0.25; 4]],
-        };
+        let k = Kernel { radius: 1, taps: vec![[0.25; 4], [0.5; 4], [0.25; 4]] };
         let row: Vec<Lanes> = [1.0, 2.0, 4.0].iter().map(|&v| [v, v, -v, 0.0]).collect();
         let mut out = vec![[0.0; 4]; 3];
         horizontal(&row, &k, &mut Vec::new(), &mut out);
         // Left edge: 0.25·1 + 0.5·1 + 0.25·2 = 1.25; middle 2.25; right 0.25·2 + 0.5·4 + 0.25·4 = 3.5.
-        assert_eq!(
-            out.iter().map(|o| o[0]).collect::<Vec<_>>(),
-            vec![1.25, 2.25, 3.5]
-        );
+        assert_eq!(out.iter().map(|o| o[0]).collect::<Vec<_>>(), vec![1.25, 2.25, 3.5]);
         assert_eq!(out[2][2], -3.5);
         // Vertical on a 1-wide, 3-tall plane is the same computation.
         let mut col = vec![[0.0; 4]; 1];

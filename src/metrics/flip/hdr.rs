@@ -18,14 +18,7 @@ use serde::Serialize;
 use crate::image::Image;
 
 /// ACES fit coefficients (k₀ … k₅ with k₂ = 0), including the 0.6 pre-exposure cancellation.
-const ACES: [f32; 6] = [
-    0.6 * 0.6 * 2.51,
-    0.6 * 0.03,
-    0.0,
-    0.6 * 0.6 * 2.43,
-    0.6 * 0.59,
-    0.14,
-];
+const ACES: [f32; 6] = [0.6 * 0.6 * 2.51, 0.6 * 0.03, 0.0, 0.6 * 0.6 * 2.43, 0.6 * 0.59, 0.14];
 
 /// The tone-mapped value whose input defines the bright end of the exposure range.
 const TARGET: f32 = 0.85;
@@ -88,15 +81,9 @@ fn upper_median(values: &mut [f32]) -> f32 {
 /// documentation for the two degenerate cases).
 pub fn exposure_range(reference: &Image) -> ExposureRange {
     let mut lum: Vec<f32> = reference.pixels.iter().map(|&p| luminance(p)).collect();
-    let max = lum
-        .iter()
-        .fold(f32::NEG_INFINITY, |m, &v| if v > m { v } else { m });
+    let max = lum.iter().fold(f32::NEG_INFINITY, |m, &v| if v > m { v } else { m });
     if lum.is_empty() || max <= 0.0 || max.is_nan() {
-        return ExposureRange {
-            start: 0.0,
-            stop: 0.0,
-            count: 2,
-        };
+        return ExposureRange { start: 0.0, stop: 0.0, count: 2 };
     }
     let mut median = upper_median(&mut lum);
     if median <= 0.0 {
@@ -160,14 +147,7 @@ mod tests {
     #[test]
     fn degenerate_references() {
         let black = Image::new(4, 4);
-        assert_eq!(
-            exposure_range(&black),
-            ExposureRange {
-                start: 0.0,
-                stop: 0.0,
-                count: 2
-            }
-        );
+        assert_eq!(exposure_range(&black), ExposureRange { start: 0.0, stop: 0.0, count: 2 });
         // Mostly black: the median of the positive luminances (here 2, of {1, 2, 8}) is used.
         let mut im = Image::new(8, 1);
         im.set(0, 0, [1.0; 3]);

@@ -52,13 +52,7 @@ impl Pipeline {
 
     /// The LDR-FLIP map of `test` against `reference` (both `width`×`height`, row-major), after
     /// `prepare` has turned each linear RGB pixel into linear RGB within [0, 1].
-    pub(crate) fn run<P>(
-        &self,
-        width: usize,
-        reference: &[[f32; 3]],
-        test: &[[f32; 3]],
-        prepare: &P,
-    ) -> Vec<f32>
+    pub(crate) fn run<P>(&self, width: usize, reference: &[[f32; 3]], test: &[[f32; 3]], prepare: &P) -> Vec<f32>
     where
         P: Fn([f32; 3]) -> [f32; 3] + Sync,
     {
@@ -72,10 +66,7 @@ impl Pipeline {
     where
         P: Fn([f32; 3]) -> [f32; 3] + Sync,
     {
-        let mut out = Filtered {
-            spatial: vec![[0.0; 4]; image.len()],
-            feature: vec![[0.0; 4]; image.len()],
-        };
+        let mut out = Filtered { spatial: vec![[0.0; 4]; image.len()], feature: vec![[0.0; 4]; image.len()] };
         out.spatial
             .par_chunks_mut(width)
             .zip(out.feature.par_chunks_mut(width))
@@ -89,12 +80,7 @@ impl Pipeline {
                     s.feature_in.push(feature::lanes(ycxcz));
                 }
                 filters::horizontal(&s.spatial_in, &self.spatial, &mut s.padded, spatial);
-                filters::horizontal(
-                    &s.feature_in,
-                    &self.feature_horizontal,
-                    &mut s.padded,
-                    feature,
-                );
+                filters::horizontal(&s.feature_in, &self.feature_horizontal, &mut s.padded, feature);
             });
         out
     }
@@ -113,14 +99,10 @@ impl Pipeline {
                 ]) {
                     filters::vertical(plane, width, y, kernel, sources, row);
                 }
-                let [sr, st, fr, ft] = &rows[..] else {
-                    unreachable!("four rows")
-                };
+                let [sr, st, fr, ft] = &rows[..] else { unreachable!("four rows") };
                 for x in 0..width {
-                    let colour_error = self.scale.error(
-                        colour::filtered_to_hunt_lab(sr[x]),
-                        colour::filtered_to_hunt_lab(st[x]),
-                    );
+                    let colour_error =
+                        self.scale.error(colour::filtered_to_hunt_lab(sr[x]), colour::filtered_to_hunt_lab(st[x]));
                     out[x] = feature::combine(colour_error, feature::difference(fr[x], ft[x]));
                 }
             },

@@ -65,21 +65,13 @@ impl FlipMap {
         if self.values.is_empty() {
             return 0.0;
         }
-        let total: f64 = self
-            .values
-            .chunks(self.width)
-            .map(|r| r.iter().map(|&v| f64::from(v)).sum::<f64>())
-            .sum();
+        let total: f64 = self.values.chunks(self.width).map(|r| r.iter().map(|&v| f64::from(v)).sum::<f64>()).sum();
         total / self.values.len() as f64
     }
 
     /// The map as a grey linear image (each channel the error), for writing as EXR or PFM.
     pub fn to_image(&self) -> Image {
-        Image {
-            width: self.width,
-            height: self.height,
-            pixels: self.values.iter().map(|&v| [v; 3]).collect(),
-        }
+        Image { width: self.width, height: self.height, pixels: self.values.iter().map(|&v| [v; 3]).collect() }
     }
 }
 
@@ -106,13 +98,8 @@ pub struct HdrFlipInfo {
 pub fn ldr_flip_map(test: &Image, reference: &Image, ppd: f32) -> Result<FlipMap> {
     check(test, reference, ppd)?;
     let clamp = |p: [f32; 3]| p.map(colour::clamp01);
-    let values =
-        ldr::Pipeline::new(ppd).run(reference.width, &reference.pixels, &test.pixels, &clamp);
-    Ok(FlipMap {
-        width: reference.width,
-        height: reference.height,
-        values,
-    })
+    let values = ldr::Pipeline::new(ppd).run(reference.width, &reference.pixels, &test.pixels, &clamp);
+    Ok(FlipMap { width: reference.width, height: reference.height, values })
 }
 
 /// HDR-FLIP of `test` against `reference` at `ppd` pixels per degree, with the automatic exposure range
@@ -130,18 +117,11 @@ pub fn hdr_flip_map(test: &Image, reference: &Image, ppd: f32) -> Result<HdrFlip
 
 /// HDR-FLIP with a given exposure range (for example the same one for several references). Errors as
 /// for [`ldr_flip_map`], and a range that is not finite, has start > stop or a count of 0.
-pub fn hdr_flip_map_with(
-    test: &Image,
-    reference: &Image,
-    ppd: f32,
-    exposures: ExposureRange,
-) -> Result<HdrFlip> {
+pub fn hdr_flip_map_with(test: &Image, reference: &Image, ppd: f32, exposures: ExposureRange) -> Result<HdrFlip> {
     check(test, reference, ppd)?;
     let ExposureRange { start, stop, count } = exposures;
     if !(start.is_finite() && stop.is_finite() && start <= stop && count >= 1) {
-        return Err(Error::usage(format!(
-            "bad exposure range: {count} exposures from {start} to {stop}"
-        )));
+        return Err(Error::usage(format!("bad exposure range: {count} exposures from {start} to {stop}")));
     }
     let pipeline = ldr::Pipeline::new(ppd);
     let mut values = vec![0.0f32; reference.pixels.len()];
@@ -154,23 +134,14 @@ pub fn hdr_flip_map_with(
             }
         }
     }
-    Ok(HdrFlip {
-        map: FlipMap {
-            width: reference.width,
-            height: reference.height,
-            values,
-        },
-        exposures,
-    })
+    Ok(HdrFlip { map: FlipMap { width: reference.width, height: reference.height, values }, exposures })
 }
 
 /// Same sizes, not empty, sensible ppd.
 fn check(test: &Image, reference: &Image, ppd: f32) -> Result<()> {
     super::check_sizes(test, reference)?;
     if !(ppd > 0.0 && ppd <= MAX_PPD) {
-        return Err(Error::usage(format!(
-            "pixels per degree must be in (0, {MAX_PPD}], not {ppd}"
-        )));
+        return Err(Error::usage(format!("pixels per degree must be in (0, {MAX_PPD}], not {ppd}")));
     }
     Ok(())
 }
@@ -204,12 +175,7 @@ mod tests {
     fn bad_inputs_are_errors() {
         let a = Image::new(4, 4);
         let b = Image::new(4, 5);
-        assert!(
-            ldr_flip_map(&a, &b, DEFAULT_PPD)
-                .unwrap_err()
-                .to_string()
-                .contains("4×4 but the reference is 4×5")
-        );
+        assert!(ldr_flip_map(&a, &b, DEFAULT_PPD).unwrap_err().to_string().contains("4×4 but the reference is 4×5"));
         assert!(ldr_flip_map(&a, &a, 0.0).is_err());
         assert!(ldr_flip_map(&a, &a, f32::NAN).is_err());
         assert!(ldr_flip_map(&Image::new(0, 0), &Image::new(0, 0), DEFAULT_PPD).is_err());
@@ -217,21 +183,13 @@ mod tests {
         r.set(2, 3, [0.0, f32::NAN, 0.0]);
         let e = hdr_flip_map(&a, &r, DEFAULT_PPD).unwrap_err().to_string();
         assert!(e.contains("(2, 3)") && e.contains("channel G"), "{e}");
-        let bad = ExposureRange {
-            start: 1.0,
-            stop: 0.0,
-            count: 2,
-        };
+        let bad = ExposureRange { start: 1.0, stop: 0.0, count: 2 };
         assert!(hdr_flip_map_with(&a, &a, DEFAULT_PPD, bad).is_err());
     }
 
     #[test]
     fn mean_and_grey_image() {
-        let m = FlipMap {
-            width: 2,
-            height: 2,
-            values: vec![0.0, 0.5, 1.0, 0.5],
-        };
+        let m = FlipMap { width: 2, height: 2, values: vec![0.0, 0.5, 1.0, 0.5] };
         assert_eq!(m.mean(), 0.5);
         assert_eq!(m.to_image().get(0, 1), [1.0; 3]);
     }

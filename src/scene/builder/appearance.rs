@@ -29,7 +29,11 @@ impl SceneBuilder {
         };
         let mut props = Props::default();
         let textures = Rc::clone(&self.gs.textures);
-        Capture { textures: &textures, loc: &n.name_loc, warnings: &mut self.warnings }.read(&n.params, kind.schema(), &mut props)?;
+        Capture { textures: &textures, loc: &n.name_loc, warnings: &mut self.warnings }.read(
+            &n.params,
+            kind.schema(),
+            &mut props,
+        )?;
         let mut mix = None;
         if kind == MaterialKind::Mix {
             let mut ids = [0u32; 2];
@@ -77,39 +81,66 @@ impl SceneBuilder {
                 self.gs.material = id;
                 Ok(())
             }
-            None => Err(Error::at(loc, format!("NamedMaterial: no material named \"{name}\" has been defined (MakeNamedMaterial) in this scope"))),
+            None => Err(Error::at(
+                loc,
+                format!(
+                    "NamedMaterial: no material named \"{name}\" has been defined (MakeNamedMaterial) in this scope"
+                ),
+            )),
         }
     }
 
-    pub(super) fn texture_directive(&mut self, name: String, value_type: &str, class: Named, loc: &SourceLoc) -> Result<()> {
+    pub(super) fn texture_directive(
+        &mut self,
+        name: String,
+        value_type: &str,
+        class: Named,
+        loc: &SourceLoc,
+    ) -> Result<()> {
         let value = match value_type {
             "float" => TextureValue::Float,
             "spectrum" | "color" | "rgb" => TextureValue::Spectrum,
-            other => return Err(Error::at(loc, format!("Texture \"{name}\": unknown texture type \"{other}\"; expected \"float\" or \"spectrum\""))),
+            other => {
+                return Err(Error::at(
+                    loc,
+                    format!("Texture \"{name}\": unknown texture type \"{other}\"; expected \"float\" or \"spectrum\""),
+                ));
+            }
         };
         let mut props = Props::default();
         let mut class_name = class.name.clone();
         match texture::schema(&class.name, value) {
             Some(schema) => {
                 let textures = Rc::clone(&self.gs.textures);
-                Capture { textures: &textures, loc: &class.name_loc, warnings: &mut self.warnings }.read(&class.params, &schema, &mut props)?;
+                Capture { textures: &textures, loc: &class.name_loc, warnings: &mut self.warnings }.read(
+                    &class.params,
+                    &schema,
+                    &mut props,
+                )?;
                 if let Some(Prop::Str(file)) = props.get("filename") {
                     if !std::path::Path::new(file).is_file() {
                         let floc = class.params.loc_of("filename").unwrap_or(&class.name_loc);
-                        self.warnings.at(floc, format!("texture \"{name}\": cannot read image \"{file}\"; using the constant 1"));
+                        self.warnings.at(
+                            floc,
+                            format!("texture \"{name}\": cannot read image \"{file}\"; using the constant 1"),
+                        );
                         props = Props::default();
                         class_name = "constant".into();
                     }
                 }
             }
             None => {
-                self.warnings.at(&class.name_loc, format!("texture \"{name}\": unknown texture class \"{}\"; using the constant 1", class.name));
+                self.warnings.at(
+                    &class.name_loc,
+                    format!("texture \"{name}\": unknown texture class \"{}\"; using the constant 1", class.name),
+                );
                 class.params.mark_all_used();
                 class_name = "constant".into();
             }
         }
         self.report_unused(&class.params, "Texture");
-        let texture_from_world = self.ctm[0].inverse().to_affine().map_err(|e| Error::at(loc, format!("Texture: {e}")))?;
+        let texture_from_world =
+            self.ctm[0].inverse().to_affine().map_err(|e| Error::at(loc, format!("Texture: {e}")))?;
         let id = self.textures.len() as u32;
         self.textures.push(Texture { name: name.clone(), value, class: class_name, props, texture_from_world });
         let scope = Rc::make_mut(&mut self.gs.textures);
@@ -128,7 +159,8 @@ impl SceneBuilder {
         };
         let mut props = Props::default();
         let textures = Rc::clone(&self.gs.textures);
-        Capture { textures: &textures, loc: &n.name_loc, warnings: &mut self.warnings }.read(&n.params, schema, &mut props)?;
+        Capture { textures: &textures, loc: &n.name_loc, warnings: &mut self.warnings }
+            .read(&n.params, schema, &mut props)?;
         self.report_unused(&n.params, "LightSource");
         let world_from_light = self.ctm[0].to_affine().map_err(|e| Error::at(loc, format!("LightSource: {e}")))?;
         self.lights.push(Light { type_name: n.name, props, world_from_light });
@@ -144,7 +176,11 @@ impl SceneBuilder {
         }
         let mut props = Props::default();
         let textures = Rc::clone(&self.gs.textures);
-        Capture { textures: &textures, loc: &n.name_loc, warnings: &mut self.warnings }.read(&n.params, light::AREA_SCHEMA, &mut props)?;
+        Capture { textures: &textures, loc: &n.name_loc, warnings: &mut self.warnings }.read(
+            &n.params,
+            light::AREA_SCHEMA,
+            &mut props,
+        )?;
         self.report_unused(&n.params, "AreaLightSource");
         self.gs.area_light = Some((props, loc.clone()));
         Ok(())
@@ -153,14 +189,24 @@ impl SceneBuilder {
     pub(super) fn object_begin(&mut self, name: String, loc: &SourceLoc) -> Result<()> {
         if let Some(o) = self.current_object {
             let outer = &self.objects[o as usize];
-            return Err(Error::at(loc, format!("ObjectBegin \"{name}\" inside the definition of \"{}\" (started at {}): missing ObjectEnd", outer.def.name, outer.loc)));
+            return Err(Error::at(
+                loc,
+                format!(
+                    "ObjectBegin \"{name}\" inside the definition of \"{}\" (started at {}): missing ObjectEnd",
+                    outer.def.name, outer.loc
+                ),
+            ));
         }
         self.push(Block::Object, loc);
         let id = self.objects.len() as u32;
         if self.object_names.insert(name.clone(), id).is_some() {
             self.warnings.at(loc, format!("object \"{name}\" redefined"));
         }
-        self.objects.push(ObjectRecord { def: ObjectDef { name, meshes: Vec::new() }, prims: Vec::new(), loc: loc.clone() });
+        self.objects.push(ObjectRecord {
+            def: ObjectDef { name, meshes: Vec::new() },
+            prims: Vec::new(),
+            loc: loc.clone(),
+        });
         self.current_object = Some(id);
         Ok(())
     }
@@ -176,19 +222,34 @@ impl SceneBuilder {
 
     pub(super) fn object_instance(&mut self, name: &str, loc: &SourceLoc) -> Result<()> {
         if let Some(o) = self.current_object {
-            return Err(Error::at(loc, format!("ObjectInstance inside the definition of \"{}\": pbrt-v3 does not nest instances", self.objects[o as usize].def.name)));
+            return Err(Error::at(
+                loc,
+                format!(
+                    "ObjectInstance inside the definition of \"{}\": pbrt-v3 does not nest instances",
+                    self.objects[o as usize].def.name
+                ),
+            ));
         }
         let Some(&object) = self.object_names.get(name) else {
-            return Err(Error::at(loc, format!("ObjectInstance: no object named \"{name}\" has been defined (ObjectBegin \"{name}\" … ObjectEnd must come first)")));
+            return Err(Error::at(
+                loc,
+                format!(
+                    "ObjectInstance: no object named \"{name}\" has been defined (ObjectBegin \"{name}\" … ObjectEnd must come first)"
+                ),
+            ));
         };
         let world_from_object = self.ctm[0].to_affine().map_err(|e| Error::at(loc, format!("ObjectInstance: {e}")))?;
-        let object_from_world = self.ctm[0].inverse().to_affine().map_err(|e| Error::at(loc, format!("ObjectInstance: {e}")))?;
+        let object_from_world =
+            self.ctm[0].inverse().to_affine().map_err(|e| Error::at(loc, format!("ObjectInstance: {e}")))?;
         if self.objects[object as usize].prims.is_empty() {
             return Ok(());
         }
         let id = self.instances.len() as u32;
         self.instances.push(InstanceXf { object, world_from_object, object_from_world });
-        self.top.push(crate::scene::accel::BuildPrim { r: crate::scene::accel::PrimRef::Instance(id), verts: [[0.0; 3]; 3] });
+        self.top.push(crate::scene::accel::BuildPrim {
+            r: crate::scene::accel::PrimRef::Instance(id),
+            verts: [[0.0; 3]; 3],
+        });
         Ok(())
     }
 }

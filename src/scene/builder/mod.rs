@@ -121,7 +121,12 @@ impl SceneBuilder {
     }
 
     /// Runs every directive, then assembles the scene. `source` names the top-level file.
-    pub(crate) fn build(mut self, directives: Vec<Directive>, source: &Path, mut stats: LoadStats) -> Result<LoadedScene> {
+    pub(crate) fn build(
+        mut self,
+        directives: Vec<Directive>,
+        source: &Path,
+        mut stats: LoadStats,
+    ) -> Result<LoadedScene> {
         let mut last_loc = None;
         for d in directives {
             last_loc = Some(d.loc.clone());
@@ -129,7 +134,12 @@ impl SceneBuilder {
         }
         let end = last_loc.unwrap_or_else(|| SourceLoc::new(source.into(), 1, 1));
         match self.phase {
-            Phase::Options => return Err(Error::at(&end, "the scene has no WorldBegin: expected WorldBegin … WorldEnd after the render options")),
+            Phase::Options => {
+                return Err(Error::at(
+                    &end,
+                    "the scene has no WorldBegin: expected WorldBegin … WorldEnd after the render options",
+                ));
+            }
             Phase::World => return Err(Error::at(&end, "the scene ends without WorldEnd")),
             Phase::Done => {}
         }
@@ -143,9 +153,17 @@ impl SceneBuilder {
             return Err(Error::at(&loc, format!("{} after WorldEnd: the scene description is over", d.kind.keyword())));
         }
         match d.kind {
-            K::Identity | K::Translate(_) | K::Scale(_) | K::Rotate(_) | K::LookAt(_) | K::Transform(_) | K::ConcatTransform(_) | K::CoordinateSystem(_) | K::CoordSysTransform(_) | K::TransformTimes(..) | K::ActiveTransform(_) => {
-                self.transform_directive(d.kind, &loc)
-            }
+            K::Identity
+            | K::Translate(_)
+            | K::Scale(_)
+            | K::Rotate(_)
+            | K::LookAt(_)
+            | K::Transform(_)
+            | K::ConcatTransform(_)
+            | K::CoordinateSystem(_)
+            | K::CoordSysTransform(_)
+            | K::TransformTimes(..)
+            | K::ActiveTransform(_) => self.transform_directive(d.kind, &loc),
             K::Camera(n) => self.options_only(&loc, "Camera").and_then(|_| self.camera_directive(n, &loc)),
             K::Film(n) => self.options_only(&loc, "Film").and_then(|_| self.film_directive(n, &loc)),
             K::Sampler(n) => self.options_only(&loc, "Sampler").and_then(|_| self.sampler_directive(n)),
@@ -160,16 +178,28 @@ impl SceneBuilder {
             K::AttributeEnd => self.world_only(&loc, "AttributeEnd").and_then(|_| self.pop(Block::Attribute, &loc)),
             K::TransformBegin => self.world_only(&loc, "TransformBegin").map(|_| self.push(Block::Transform, &loc)),
             K::TransformEnd => self.world_only(&loc, "TransformEnd").and_then(|_| self.pop(Block::Transform, &loc)),
-            K::ReverseOrientation => self.world_only(&loc, "ReverseOrientation").map(|_| self.gs.reverse_orientation ^= true),
+            K::ReverseOrientation => {
+                self.world_only(&loc, "ReverseOrientation").map(|_| self.gs.reverse_orientation ^= true)
+            }
             K::ObjectBegin(name) => self.world_only(&loc, "ObjectBegin").and_then(|_| self.object_begin(name, &loc)),
             K::ObjectEnd => self.world_only(&loc, "ObjectEnd").and_then(|_| self.object_end(&loc)),
-            K::ObjectInstance(name) => self.world_only(&loc, "ObjectInstance").and_then(|_| self.object_instance(&name, &loc)),
+            K::ObjectInstance(name) => {
+                self.world_only(&loc, "ObjectInstance").and_then(|_| self.object_instance(&name, &loc))
+            }
             K::LightSource(n) => self.world_only(&loc, "LightSource").and_then(|_| self.light_source(n, &loc)),
-            K::AreaLightSource(n) => self.world_only(&loc, "AreaLightSource").and_then(|_| self.area_light_source(n, &loc)),
+            K::AreaLightSource(n) => {
+                self.world_only(&loc, "AreaLightSource").and_then(|_| self.area_light_source(n, &loc))
+            }
             K::Material(n) => self.world_only(&loc, "Material").and_then(|_| self.material_directive(n, &loc)),
-            K::MakeNamedMaterial(n) => self.world_only(&loc, "MakeNamedMaterial").and_then(|_| self.make_named_material(n, &loc)),
-            K::NamedMaterial(name) => self.world_only(&loc, "NamedMaterial").and_then(|_| self.named_material(&name, &loc)),
-            K::Texture { name, value_type, class } => self.world_only(&loc, "Texture").and_then(|_| self.texture_directive(name, &value_type, class, &loc)),
+            K::MakeNamedMaterial(n) => {
+                self.world_only(&loc, "MakeNamedMaterial").and_then(|_| self.make_named_material(n, &loc))
+            }
+            K::NamedMaterial(name) => {
+                self.world_only(&loc, "NamedMaterial").and_then(|_| self.named_material(&name, &loc))
+            }
+            K::Texture { name, value_type, class } => {
+                self.world_only(&loc, "Texture").and_then(|_| self.texture_directive(name, &value_type, class, &loc))
+            }
             K::Shape(n) => self.world_only(&loc, "Shape").and_then(|_| self.shape_directive(n, &loc)),
         }
     }
@@ -226,16 +256,31 @@ impl SceneBuilder {
                 c
             }
             None => {
-                let named = Named { name: "perspective".into(), name_loc: SourceLoc::new(source.into(), 1, 1), params: ParamList::default() };
+                let named = Named {
+                    name: "perspective".into(),
+                    name_loc: SourceLoc::new(source.into(), 1, 1),
+                    params: ParamList::default(),
+                };
                 Camera::from_directive(&named, &Transform::IDENTITY, &self.film, &mut self.warnings)?
             }
         };
         let t = Instant::now();
         let objects: Vec<ObjectRecord> = std::mem::take(&mut self.objects);
-        let (defs, object_prims): (Vec<ObjectDef>, Vec<Vec<BuildPrim>>) = objects.into_iter().map(|o| (o.def, o.prims)).unzip();
-        let accel = Accel::build(std::mem::take(&mut self.top), object_prims, std::mem::take(&mut self.instances), std::mem::take(&mut self.quadrics));
+        let (defs, object_prims): (Vec<ObjectDef>, Vec<Vec<BuildPrim>>) =
+            objects.into_iter().map(|o| (o.def, o.prims)).unzip();
+        let accel = Accel::build(
+            std::mem::take(&mut self.top),
+            object_prims,
+            std::mem::take(&mut self.instances),
+            std::mem::take(&mut self.quadrics),
+        );
         stats.bvh_secs = t.elapsed().as_secs_f64();
-        let geometry = Geometry { meshes: std::mem::take(&mut self.meshes), objects: defs, quadric_info: std::mem::take(&mut self.quadric_info), accel };
+        let geometry = Geometry {
+            meshes: std::mem::take(&mut self.meshes),
+            objects: defs,
+            quadric_info: std::mem::take(&mut self.quadric_info),
+            accel,
+        };
         stats.shapes = self.shape_count;
         stats.triangles = geometry.stored_triangles();
         let (_, _, instances) = geometry.accel.counts();

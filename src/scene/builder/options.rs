@@ -58,7 +58,8 @@ impl SceneBuilder {
         n.params.mark_all_used();
         if !self.media_warned {
             self.media_warned = true;
-            self.warnings.at(loc, "participating media are not rendered by cachert; MakeNamedMedium is accepted and ignored");
+            self.warnings
+                .at(loc, "participating media are not rendered by cachert; MakeNamedMedium is accepted and ignored");
         }
         self.media.insert(n.name, loc.clone());
         Ok(())

@@ -17,7 +17,8 @@ use crate::scene::shapes::{obj, ply};
 use super::SceneBuilder;
 
 /// pbrt-v3 shapes cachert does not model; they are skipped with a warning rather than failing the scene.
-const UNSUPPORTED_PBRT_SHAPES: [&str; 7] = ["cone", "paraboloid", "hyperboloid", "curve", "loopsubdiv", "nurbs", "heightfield"];
+const UNSUPPORTED_PBRT_SHAPES: [&str; 7] =
+    ["cone", "paraboloid", "hyperboloid", "curve", "loopsubdiv", "nurbs", "heightfield"];
 
 /// The shape types cachert reads.
 const SHAPES: [&str; 6] = ["trianglemesh", "plymesh", "objmesh", "sphere", "disk", "cylinder"];
@@ -40,7 +41,10 @@ impl SceneBuilder {
                 Built::Nothing
             }
             other => {
-                return Err(Error::at(&n.name_loc, format!("unknown shape type \"{other}\"; expected one of {}", SHAPES.join(", "))));
+                return Err(Error::at(
+                    &n.name_loc,
+                    format!("unknown shape type \"{other}\"; expected one of {}", SHAPES.join(", ")),
+                ));
             }
         };
         if self.alpha_hides(&n)? {
@@ -55,13 +59,21 @@ impl SceneBuilder {
         let shape = match built {
             Built::Nothing => return Ok(()),
             Built::Mesh(data) => {
-                let mesh = TriangleMesh::place(data, &xf, reverse, material).map_err(|e| Error::at(loc, format!("Shape \"{}\": {e}", n.name)))?;
+                let mesh = TriangleMesh::place(data, &xf, reverse, material)
+                    .map_err(|e| Error::at(loc, format!("Shape \"{}\": {e}", n.name)))?;
                 self.add_mesh(mesh).map(ShapeId::Mesh)
             }
             Built::Quadric(kind) => {
-                let world_from_object = xf.to_affine().map_err(|e| Error::at(loc, format!("Shape \"{}\": {e}", n.name)))?;
-                let object_from_world = xf.inverse().to_affine().map_err(|e| Error::at(loc, format!("Shape \"{}\": {e}", n.name)))?;
-                let q = Quadric { kind, world_from_object, object_from_world, flip_normal: reverse ^ xf.swaps_handedness() };
+                let world_from_object =
+                    xf.to_affine().map_err(|e| Error::at(loc, format!("Shape \"{}\": {e}", n.name)))?;
+                let object_from_world =
+                    xf.inverse().to_affine().map_err(|e| Error::at(loc, format!("Shape \"{}\": {e}", n.name)))?;
+                let q = Quadric {
+                    kind,
+                    world_from_object,
+                    object_from_world,
+                    flip_normal: reverse ^ xf.swaps_handedness(),
+                };
                 let id = self.add_quadric(q, ShapeInfo { material, area_light: None });
                 self.current_object.is_none().then_some(ShapeId::Quadric(id))
             }
@@ -93,7 +105,10 @@ impl SceneBuilder {
                 Some(TexOr::Value(v)) if v == 0.0 && name == "alpha" => hidden = true,
                 Some(TexOr::Texture(t)) => {
                     let loc = n.params.loc_of(name).unwrap_or(&n.name_loc);
-                    self.warnings.at(loc, format!("alpha-mask texture \"{t}\" is not supported yet; the shape is treated as opaque"));
+                    self.warnings.at(
+                        loc,
+                        format!("alpha-mask texture \"{t}\" is not supported yet; the shape is treated as opaque"),
+                    );
                 }
                 _ => {}
             }
@@ -111,7 +126,11 @@ impl SceneBuilder {
         }
         let mut m = self.materials[current as usize].clone();
         let textures = Rc::clone(&self.gs.textures);
-        Capture { textures: &textures, loc: &n.name_loc, warnings: &mut self.warnings }.read(&n.params, schema, &mut m.props)?;
+        Capture { textures: &textures, loc: &n.name_loc, warnings: &mut self.warnings }.read(
+            &n.params,
+            schema,
+            &mut m.props,
+        )?;
         self.materials.push(m);
         Ok(self.materials.len() as u32 - 1)
     }
@@ -119,7 +138,10 @@ impl SceneBuilder {
     fn attach_area_light(&mut self, shape: Option<ShapeId>, loc: &SourceLoc) {
         let Some((props, _)) = self.gs.area_light.clone() else { return };
         let Some(shape) = shape else {
-            self.warnings.at(loc, "area lights are not supported inside object instances (as in pbrt-v3); the shape does not emit");
+            self.warnings.at(
+                loc,
+                "area lights are not supported inside object instances (as in pbrt-v3); the shape does not emit",
+            );
             return;
         };
         let id = self.area_lights.len() as u32;
@@ -138,11 +160,18 @@ fn quadric_params(n: &Named) -> Result<QuadricKind> {
         if v > 0.0 && v.is_finite() {
             Ok(v)
         } else {
-            Err(Error::at(p.loc_of(name).unwrap_or(&n.name_loc), format!("{} \"{name}\" must be positive and finite, got {v}", n.name)))
+            Err(Error::at(
+                p.loc_of(name).unwrap_or(&n.name_loc),
+                format!("{} \"{name}\" must be positive and finite, got {v}", n.name),
+            ))
         }
     };
     let finite = |name: &str, v: f64| -> Result<f64> {
-        if v.is_finite() { Ok(v) } else { Err(Error::at(p.loc_of(name).unwrap_or(&n.name_loc), format!("{} \"{name}\" must be finite", n.name))) }
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(Error::at(p.loc_of(name).unwrap_or(&n.name_loc), format!("{} \"{name}\" must be finite", n.name)))
+        }
     };
     let phi_max = finite("phimax", p.float_or("phimax", 360.0)?)?.clamp(0.0, 360.0).to_radians().min(TAU);
     Ok(match n.name.as_str() {
@@ -155,7 +184,12 @@ fn quadric_params(n: &Named) -> Result<QuadricKind> {
         "disk" => {
             let radius = positive("radius", p.float_or("radius", 1.0)?)?;
             let inner = finite("innerradius", p.float_or("innerradius", 0.0)?)?.max(0.0);
-            QuadricKind::Disk { height: finite("height", p.float_or("height", 0.0)?)?, radius, inner_radius: inner, phi_max }
+            QuadricKind::Disk {
+                height: finite("height", p.float_or("height", 0.0)?)?,
+                radius,
+                inner_radius: inner,
+                phi_max,
+            }
         }
         _ => {
             let r = positive("radius", p.float_or("radius", 1.0)?)?;

@@ -72,12 +72,21 @@ impl SceneBuilder {
     /// Restores what the matching begin saved; a mismatched or missing begin is an error.
     pub(super) fn pop(&mut self, block: Block, loc: &SourceLoc) -> Result<()> {
         let Some(top) = self.stack.last() else {
-            return Err(Error::at(loc, format!("{} without a matching {}", block.end_keyword(), block.begin_keyword())));
+            return Err(Error::at(
+                loc,
+                format!("{} without a matching {}", block.end_keyword(), block.begin_keyword()),
+            ));
         };
         if top.block != block {
             return Err(Error::at(
                 loc,
-                format!("{} closes the {} at {}; expected {}", block.end_keyword(), top.block.begin_keyword(), top.loc, top.block.end_keyword()),
+                format!(
+                    "{} closes the {} at {}; expected {}",
+                    block.end_keyword(),
+                    top.block.begin_keyword(),
+                    top.loc,
+                    top.block.end_keyword()
+                ),
             ));
         }
         let Some(f) = self.stack.pop() else { return Ok(()) };

@@ -57,7 +57,13 @@ impl SceneBuilder {
                 None => {
                     let mut known: Vec<&str> = self.named_coords.keys().map(|s| s.as_str()).collect();
                     known.sort();
-                    self.warnings.at(loc, format!("CoordSysTransform: no coordinate system named \"{name}\" (known: {}); ignored", known.join(", ")));
+                    self.warnings.at(
+                        loc,
+                        format!(
+                            "CoordSysTransform: no coordinate system named \"{name}\" (known: {}); ignored",
+                            known.join(", ")
+                        ),
+                    );
                 }
             },
             DirectiveKind::ActiveTransform(a) => {
@@ -102,7 +108,8 @@ impl SceneBuilder {
     fn check_motion(&mut self, loc: &SourceLoc) {
         if self.ctm[0] != self.ctm[1] && !self.motion_warned {
             self.motion_warned = true;
-            self.warnings.at(loc, "animated transforms (ActiveTransform/TransformTimes) are rendered at their start transform");
+            self.warnings
+                .at(loc, "animated transforms (ActiveTransform/TransformTimes) are rendered at their start transform");
         }
     }
 }

@@ -39,44 +39,19 @@ impl MeshData {
     pub fn validate(&self) -> Result<(), String> {
         let n = self.positions.len();
         if !self.normals.is_empty() && self.normals.len() != n {
-            return Err(format!(
-                "{} normals for {n} vertices (expected none or one per vertex)",
-                self.normals.len()
-            ));
+            return Err(format!("{} normals for {n} vertices (expected none or one per vertex)", self.normals.len()));
         }
         if !self.uvs.is_empty() && self.uvs.len() != n {
-            return Err(format!(
-                "{} uvs for {n} vertices (expected none or one per vertex)",
-                self.uvs.len()
-            ));
+            return Err(format!("{} uvs for {n} vertices (expected none or one per vertex)", self.uvs.len()));
         }
         if !self.indices.len().is_multiple_of(3) {
-            return Err(format!(
-                "{} vertex indices is not a multiple of 3",
-                self.indices.len()
-            ));
+            return Err(format!("{} vertex indices is not a multiple of 3", self.indices.len()));
         }
-        if let Some((i, &v)) = self
-            .indices
-            .iter()
-            .enumerate()
-            .find(|&(_, &v)| v as usize >= n)
-        {
-            return Err(format!(
-                "triangle {} references vertex {v}, but there are {n} vertices",
-                i / 3
-            ));
+        if let Some((i, &v)) = self.indices.iter().enumerate().find(|&(_, &v)| v as usize >= n) {
+            return Err(format!("triangle {} references vertex {v}, but there are {n} vertices", i / 3));
         }
-        if let Some((i, p)) = self
-            .positions
-            .iter()
-            .enumerate()
-            .find(|(_, p)| !p.iter().all(|c| c.is_finite()))
-        {
-            return Err(format!(
-                "vertex {i} has a non-finite position ({}, {}, {})",
-                p[0], p[1], p[2]
-            ));
+        if let Some((i, p)) = self.positions.iter().enumerate().find(|(_, p)| !p.iter().all(|c| c.is_finite())) {
+            return Err(format!("vertex {i} has a non-finite position ({}, {}, {})", p[0], p[1], p[2]));
         }
         Ok(())
     }
@@ -126,11 +101,7 @@ mod tests {
     fn each_broken_invariant_is_named() {
         let mut m = triangle();
         m.normals.pop();
-        assert!(
-            m.validate()
-                .unwrap_err()
-                .contains("2 normals for 3 vertices")
-        );
+        assert!(m.validate().unwrap_err().contains("2 normals for 3 vertices"));
         let mut m = triangle();
         m.uvs.push([0.0, 0.0]);
         assert!(m.validate().unwrap_err().contains("4 uvs for 3 vertices"));
@@ -139,16 +110,10 @@ mod tests {
         assert!(m.validate().unwrap_err().contains("not a multiple of 3"));
         let mut m = triangle();
         m.indices.extend([0, 1, 7]);
-        assert_eq!(
-            m.validate().unwrap_err(),
-            "triangle 1 references vertex 7, but there are 3 vertices"
-        );
+        assert_eq!(m.validate().unwrap_err(), "triangle 1 references vertex 7, but there are 3 vertices");
         let mut m = triangle();
         m.positions[2][1] = f32::INFINITY;
-        assert_eq!(
-            m.validate().unwrap_err(),
-            "vertex 2 has a non-finite position (0, inf, 0)"
-        );
+        assert_eq!(m.validate().unwrap_err(), "vertex 2 has a non-finite position (0, inf, 0)");
     }
 
     #[test]

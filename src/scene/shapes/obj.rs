@@ -25,25 +25,16 @@ use crate::error::{Error, Result, Warnings};
 /// Errors: an unreadable file, tobj's parse errors (tobj's own message, which has no line number), too many
 /// vertices for 32-bit indices, a non-finite position, and a crash inside tobj (caught, not propagated).
 pub fn read_obj(path: &Path, warnings: &mut Warnings) -> Result<MeshData> {
-    let bytes =
-        std::fs::read(path).map_err(|e| Error::file(path, format!("cannot read OBJ file: {e}")))?;
-    let options = tobj::LoadOptions {
-        triangulate: true,
-        single_index: true,
-        ignore_points: true,
-        ignore_lines: true,
-    };
+    let bytes = std::fs::read(path).map_err(|e| Error::file(path, format!("cannot read OBJ file: {e}")))?;
+    let options = tobj::LoadOptions { triangulate: true, single_index: true, ignore_points: true, ignore_lines: true };
     // Materials are never loaded: this also keeps tobj's MTL parser (which can panic on a short `Kd` line)
     // away from user input.
     let no_materials = |_: &Path| Ok((Vec::new(), Default::default()));
     // tobj has index arithmetic that overflows (a panic in debug builds) on absurd relative indices; a
     // malformed file must give an error, not a crash.
-    let loaded = catch_unwind(AssertUnwindSafe(|| {
-        tobj::load_obj_buf(&mut bytes.as_slice(), &options, no_materials)
-    }))
-    .map_err(|_| Error::file(path, "invalid OBJ file (the OBJ parser crashed on it)"))?;
-    let (models, _materials) =
-        loaded.map_err(|e| Error::file(path, format!("invalid OBJ file: {e}")))?;
+    let loaded = catch_unwind(AssertUnwindSafe(|| tobj::load_obj_buf(&mut bytes.as_slice(), &options, no_materials)))
+        .map_err(|_| Error::file(path, "invalid OBJ file (the OBJ parser crashed on it)"))?;
+    let (models, _materials) = loaded.map_err(|e| Error::file(path, format!("invalid OBJ file: {e}")))?;
 
     let mut mesh = merge(&models).map_err(|msg| Error::file(path, msg))?;
     let bad = mesh.drop_unusable_normals();
@@ -55,10 +46,7 @@ pub fn read_obj(path: &Path, warnings: &mut Warnings) -> Result<MeshData> {
         ));
     }
     if mesh.triangle_count() == 0 {
-        warnings.general(format!(
-            "{}: objmesh: the file has no triangles, so the shape is empty",
-            path.display()
-        ));
+        warnings.general(format!("{}: objmesh: the file has no triangles, so the shape is empty", path.display()));
     }
     mesh.validate().map_err(|msg| Error::file(path, msg))?;
     Ok(mesh)
@@ -67,18 +55,11 @@ pub fn read_obj(path: &Path, warnings: &mut Warnings) -> Result<MeshData> {
 /// Concatenates tobj's models, offsetting each model's indices by the vertices before it.
 fn merge(models: &[tobj::Model]) -> Result<MeshData, String> {
     let vertices = |m: &tobj::Mesh| m.positions.len() / 3;
-    let normals = models
-        .iter()
-        .all(|m| m.mesh.normals.len() == 3 * vertices(&m.mesh));
-    let uvs = models
-        .iter()
-        .all(|m| m.mesh.texcoords.len() == 2 * vertices(&m.mesh));
+    let normals = models.iter().all(|m| m.mesh.normals.len() == 3 * vertices(&m.mesh));
+    let uvs = models.iter().all(|m| m.mesh.texcoords.len() == 2 * vertices(&m.mesh));
     let total: usize = models.iter().map(|m| vertices(&m.mesh)).sum();
     if total > u32::MAX as usize {
-        return Err(format!(
-            "{total} vertices; at most {} are supported",
-            u32::MAX
-        ));
+        return Err(format!("{total} vertices; at most {} are supported", u32::MAX));
     }
     let mut mesh = MeshData {
         positions: Vec::with_capacity(total),
@@ -90,18 +71,14 @@ fn merge(models: &[tobj::Model]) -> Result<MeshData, String> {
         let m = &model.mesh;
         // Cannot truncate: total vertices were checked against u32::MAX above.
         let base = mesh.positions.len() as u32;
-        mesh.positions
-            .extend(m.positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]));
+        mesh.positions.extend(m.positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]));
         if normals {
-            mesh.normals
-                .extend(m.normals.chunks_exact(3).map(|n| [n[0], n[1], n[2]]));
+            mesh.normals.extend(m.normals.chunks_exact(3).map(|n| [n[0], n[1], n[2]]));
         }
         if uvs {
-            mesh.uvs
-                .extend(m.texcoords.chunks_exact(2).map(|t| [t[0], t[1]]));
+            mesh.uvs.extend(m.texcoords.chunks_exact(2).map(|t| [t[0], t[1]]));
         }
-        mesh.indices
-            .extend(m.indices.iter().map(|&i| base.saturating_add(i)));
+        mesh.indices.extend(m.indices.iter().map(|&i| base.saturating_add(i)));
     }
     Ok(mesh)
 }
@@ -123,11 +100,7 @@ mod tests {
 
     fn read(text: &str) -> (Result<MeshData>, Warnings) {
         static N: AtomicUsize = AtomicUsize::new(0);
-        let name = format!(
-            "cachert-obj-test-{}-{}.obj",
-            std::process::id(),
-            N.fetch_add(1, Ordering::Relaxed)
-        );
+        let name = format!("cachert-obj-test-{}-{}.obj", std::process::id(), N.fetch_add(1, Ordering::Relaxed));
         let file = TempFile(std::env::temp_dir().join(name));
         std::fs::write(&file.0, text).unwrap();
         let mut warnings = Warnings::default();
@@ -190,31 +163,14 @@ mod tests {
 
     #[test]
     fn broken_files_are_errors() {
-        assert_eq!(
-            err("v 0 0 0\nv 1 x 0\n"),
-            "invalid OBJ file: position parse error"
-        );
-        assert_eq!(
-            err("v 0 0 0\nv 1 0 0\nf 1 2 3\n"),
-            "invalid OBJ file: face vertex index out of bounds"
-        );
-        assert_eq!(
-            err("v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n"),
-            "vertex 2 has a non-finite position (NaN, 1, 0)"
-        );
+        assert_eq!(err("v 0 0 0\nv 1 x 0\n"), "invalid OBJ file: position parse error");
+        assert_eq!(err("v 0 0 0\nv 1 0 0\nf 1 2 3\n"), "invalid OBJ file: face vertex index out of bounds");
+        assert_eq!(err("v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n"), "vertex 2 has a non-finite position (NaN, 1, 0)");
         // tobj's index arithmetic overflows here (a panic in debug builds, an error in release ones).
-        assert!(
-            err("v 0 0 0\nvt 0 0\nvn 0 0 1\nf 1/-100/-100 1/1/1 1/1/1\n")
-                .starts_with("invalid OBJ file")
-        );
+        assert!(err("v 0 0 0\nvt 0 0\nvn 0 0 1\nf 1/-100/-100 1/1/1 1/1/1\n").starts_with("invalid OBJ file"));
         let missing = std::env::temp_dir().join("cachert-obj-test-does-not-exist.obj");
-        let e = read_obj(&missing, &mut Warnings::default())
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.starts_with(&format!("{}: cannot read OBJ file: ", missing.display())),
-            "{e}"
-        );
+        let e = read_obj(&missing, &mut Warnings::default()).unwrap_err().to_string();
+        assert!(e.starts_with(&format!("{}: cannot read OBJ file: ", missing.display())), "{e}");
     }
 
     #[test]
@@ -226,9 +182,7 @@ mod tests {
 
     /// `../shared/scenes/<dir>` beside the repository, or `None` (with the reason printed) when it is absent.
     fn scene_dir(dir: &str) -> Option<PathBuf> {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../shared/scenes")
-            .join(dir);
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes").join(dir);
         if path.is_dir() {
             Some(path)
         } else {
@@ -267,12 +221,7 @@ mod tests {
             let mut warnings = Warnings::default();
             let mesh = read_obj(f, &mut warnings).unwrap();
             assert!(warnings.is_empty(), "{warnings:?}");
-            assert!(
-                mesh.triangle_count() >= 10,
-                "{}: {} triangles",
-                f.display(),
-                mesh.triangle_count()
-            );
+            assert!(mesh.triangle_count() >= 10, "{}: {} triangles", f.display(), mesh.triangle_count());
             eprintln!(
                 "{}: {} triangles, {} vertices, normals {}, uvs {}",
                 f.display(),

@@ -35,22 +35,13 @@ use crate::error::{Error, Result, Warnings};
 /// normals, no triangles at all) are recorded in `warnings`, each naming the file. Everything else is an
 /// [`Error::File`] naming the file and, where it applies, the element number or ascii line.
 pub fn read_ply(path: &Path, warnings: &mut Warnings) -> Result<MeshData> {
-    let bytes =
-        std::fs::read(path).map_err(|e| Error::file(path, format!("cannot read PLY file: {e}")))?;
+    let bytes = std::fs::read(path).map_err(|e| Error::file(path, format!("cannot read PLY file: {e}")))?;
     let fail = |msg: String| Error::file(path, msg);
     let header = parse_header(&bytes).map_err(fail)?;
     let plan = plan(&header).map_err(fail)?;
     let body = bytes.get(header.body_start..).unwrap_or_default();
     let (mut mesh, ignored) = match header.format {
-        Format::Ascii => read_body(
-            &header,
-            &plan,
-            &mut Ascii {
-                data: body,
-                pos: 0,
-                line: header.body_line,
-            },
-        ),
+        Format::Ascii => read_body(&header, &plan, &mut Ascii { data: body, pos: 0, line: header.body_line }),
         Format::BinaryLe => read_body(&header, &plan, &mut Binary::<false> { data: body, pos: 0 }),
         Format::BinaryBe => read_body(&header, &plan, &mut Binary::<true> { data: body, pos: 0 }),
     }
@@ -67,14 +58,10 @@ fn report_losses(path: &Path, ignored: &Ignored, mesh: &mut MeshData, warnings: 
     let name = path.display();
     if !ignored.is_empty() {
         let plural = |n: u64| if n == 1 { "" } else { "s" };
-        let counts: Vec<String> = ignored
-            .iter()
-            .map(|(k, n)| format!("{n} face{} with {k} vertices", plural(*n)))
-            .collect();
+        let counts: Vec<String> =
+            ignored.iter().map(|(k, n)| format!("{n} face{} with {k} vertices", plural(*n))).collect();
         let counts = counts.join(", ");
-        warnings.general(format!(
-            "{name}: plymesh: ignored {counts} (only triangles and quads are supported)"
-        ));
+        warnings.general(format!("{name}: plymesh: ignored {counts} (only triangles and quads are supported)"));
     }
     let bad = mesh.drop_unusable_normals();
     if bad > 0 {
@@ -85,9 +72,7 @@ fn report_losses(path: &Path, ignored: &Ignored, mesh: &mut MeshData, warnings: 
         ));
     }
     if mesh.triangle_count() == 0 {
-        warnings.general(format!(
-            "{name}: plymesh: the file has no triangles, so the shape is empty"
-        ));
+        warnings.general(format!("{name}: plymesh: the file has no triangles, so the shape is empty"));
     }
 }
 
@@ -166,9 +151,7 @@ struct Element {
 impl Element {
     /// The position of the non-list property called `name`.
     fn scalar(&self, name: &str) -> Option<usize> {
-        self.props
-            .iter()
-            .position(|p| p.name == name && matches!(p.kind, Kind::Scalar(_)))
+        self.props.iter().position(|p| p.name == name && matches!(p.kind, Kind::Scalar(_)))
     }
 
     /// "vertices", "faces" or "\"name\" elements", for messages.
@@ -212,25 +195,17 @@ fn parse_header(bytes: &[u8]) -> Result<Header, String> {
             ["ply"] if line == 1 => {}
             ["format", name, version] => format = Some(parse_format(name, version).map_err(at)?),
             ["element", name, count] => {
-                let count = count.parse().map_err(|_| {
-                    at(format!(
-                        "element count \"{count}\" is not a non-negative integer"
-                    ))
-                })?;
+                let count = count
+                    .parse()
+                    .map_err(|_| at(format!("element count \"{count}\" is not a non-negative integer")))?;
                 if matches!(*name, "vertex" | "face") && elements.iter().any(|e| e.name == *name) {
                     return Err(at(format!("a second \"{name}\" element")));
                 }
-                elements.push(Element {
-                    name: name.to_string(),
-                    count,
-                    props: Vec::new(),
-                });
+                elements.push(Element { name: name.to_string(), count, props: Vec::new() });
             }
             ["property", words @ ..] => {
                 let prop = parse_property(words).map_err(at)?;
-                let element = elements
-                    .last_mut()
-                    .ok_or_else(|| at("a property before any element".into()))?;
+                let element = elements.last_mut().ok_or_else(|| at("a property before any element".into()))?;
                 element.props.push(prop);
             }
             ["end_header"] => break,
@@ -238,12 +213,7 @@ fn parse_header(bytes: &[u8]) -> Result<Header, String> {
         }
     }
     let format = format.ok_or("the header has no format line")?;
-    Ok(Header {
-        format,
-        elements,
-        body_start: pos,
-        body_line: line + 1,
-    })
+    Ok(Header { format, elements, body_start: pos, body_line: line + 1 })
 }
 
 fn parse_format(name: &str, version: &str) -> Result<Format, String> {
@@ -258,43 +228,28 @@ fn parse_format(name: &str, version: &str) -> Result<Format, String> {
         }
     };
     if version != "1.0" {
-        return Err(format!(
-            "unsupported PLY version \"{version}\" (only 1.0 is known)"
-        ));
+        return Err(format!("unsupported PLY version \"{version}\" (only 1.0 is known)"));
     }
     Ok(format)
 }
 
 /// Parses the words after `property`: `TYPE NAME` or `list LENTYPE ITEMTYPE NAME`.
 fn parse_property(words: &[&str]) -> Result<Property, String> {
-    let ty = |name: &str| {
-        Scalar::from_name(name).ok_or_else(|| format!("unknown property type \"{name}\""))
-    };
+    let ty = |name: &str| Scalar::from_name(name).ok_or_else(|| format!("unknown property type \"{name}\""));
     let (kind, name) = match words {
         ["list", len, item, name] => {
             let len_ty = ty(len)?;
             if len_ty.is_float() {
                 return Err(format!("list length type \"{len}\" is not an integer type"));
             }
-            (
-                Kind::List {
-                    len: len_ty,
-                    item: ty(item)?,
-                },
-                name,
-            )
+            (Kind::List { len: len_ty, item: ty(item)? }, name)
         }
         [scalar, name] => (Kind::Scalar(ty(scalar)?), name),
         _ => {
-            return Err(
-                "expected \"property TYPE NAME\" or \"property list LENTYPE ITEMTYPE NAME\"".into(),
-            );
+            return Err("expected \"property TYPE NAME\" or \"property list LENTYPE ITEMTYPE NAME\"".into());
         }
     };
-    Ok(Property {
-        name: name.to_string(),
-        kind,
-    })
+    Ok(Property { name: name.to_string(), kind })
 }
 
 /// Slots of the per-vertex scratch array that vertex properties are decoded into.
@@ -316,55 +271,31 @@ struct Plan {
 
 /// Checks that the header describes a mesh and decides where each used property goes.
 fn plan(header: &Header) -> Result<Plan, String> {
-    let vertex = header
-        .elements
-        .iter()
-        .find(|e| e.name == "vertex")
-        .ok_or("no \"vertex\" element in the header")?;
+    let vertex = header.elements.iter().find(|e| e.name == "vertex").ok_or("no \"vertex\" element in the header")?;
     if vertex.count > u64::from(u32::MAX) {
-        return Err(format!(
-            "the header declares {} vertices; at most {} are supported",
-            vertex.count,
-            u32::MAX
-        ));
+        return Err(format!("the header declares {} vertices; at most {} are supported", vertex.count, u32::MAX));
     }
     let mut slots = vec![None; vertex.props.len()];
     for (k, name) in ["x", "y", "z"].iter().enumerate() {
-        let p = vertex
-            .scalar(name)
-            .ok_or_else(|| format!("the vertex element has no \"{name}\" property"))?;
+        let p = vertex.scalar(name).ok_or_else(|| format!("the vertex element has no \"{name}\" property"))?;
         slots[p] = Some(X + k);
     }
     let normals = assign(vertex, &mut slots, &["nx", "ny", "nz"], NX);
-    let pairs = [
-        ["u", "v"],
-        ["s", "t"],
-        ["texture_u", "texture_v"],
-        ["texture_s", "texture_t"],
-    ];
+    let pairs = [["u", "v"], ["s", "t"], ["texture_u", "texture_v"], ["texture_s", "texture_t"]];
     let uvs = pairs.iter().any(|pair| assign(vertex, &mut slots, pair, U));
     let face_list = match header.elements.iter().find(|e| e.name == "face") {
         None => None,
         Some(face) => {
             let found = ["vertex_indices", "vertex_index"].iter().find_map(|name| {
-                face.props
-                    .iter()
-                    .enumerate()
-                    .find_map(|(i, p)| match p.kind {
-                        Kind::List { len, item } if p.name == *name => Some((i, len, item)),
-                        _ => None,
-                    })
+                face.props.iter().enumerate().find_map(|(i, p)| match p.kind {
+                    Kind::List { len, item } if p.name == *name => Some((i, len, item)),
+                    _ => None,
+                })
             });
             Some(found.ok_or("the face element has no \"vertex_indices\" list property")?)
         }
     };
-    Ok(Plan {
-        slots,
-        normals,
-        uvs,
-        vertex_count: vertex.count,
-        face_list,
-    })
+    Ok(Plan { slots, normals, uvs, vertex_count: vertex.count, face_list })
 }
 
 /// Sends the scalar properties `names` to consecutive slots from `first` when all of them exist.
@@ -420,13 +351,7 @@ struct Binary<'a, const BIG: bool> {
 
 macro_rules! decode {
     ($rest:expr, $t:ty) => {
-        $rest.first_chunk().map(|b| {
-            (if BIG {
-                <$t>::from_be_bytes(*b)
-            } else {
-                <$t>::from_le_bytes(*b)
-            }) as f64
-        })
+        $rest.first_chunk().map(|b| (if BIG { <$t>::from_be_bytes(*b) } else { <$t>::from_le_bytes(*b) }) as f64)
     };
 }
 
@@ -451,9 +376,7 @@ impl<const BIG: bool> Body for Binary<'_, BIG> {
 
     fn skip(&mut self, ty: Scalar, n: u64) -> Result<(), BodyErr> {
         let left = self.data.len() - self.pos;
-        let bytes = usize::try_from(n)
-            .ok()
-            .and_then(|n| n.checked_mul(ty.size()));
+        let bytes = usize::try_from(n).ok().and_then(|n| n.checked_mul(ty.size()));
         match bytes {
             Some(b) if b <= left => {
                 self.pos += b;
@@ -491,11 +414,7 @@ impl<'a> Ascii<'a> {
             self.pos += 1;
         }
         let start = self.pos;
-        while self
-            .data
-            .get(self.pos)
-            .is_some_and(|c| !c.is_ascii_whitespace())
-        {
+        while self.data.get(self.pos).is_some_and(|c| !c.is_ascii_whitespace()) {
             self.pos += 1;
         }
         self.data.get(start..self.pos).filter(|t| !t.is_empty())
@@ -513,15 +432,8 @@ impl Body for Ascii<'_> {
         };
         v.ok_or_else(|| {
             let shown: String = String::from_utf8_lossy(token).chars().take(40).collect();
-            let want = if ty.is_float() {
-                "a number"
-            } else {
-                "an integer"
-            };
-            BodyErr::Bad(format!(
-                "line {}: expected {want}, found \"{shown}\"",
-                self.line
-            ))
+            let want = if ty.is_float() { "a number" } else { "an integer" };
+            BodyErr::Bad(format!("line {}: expected {want}, found \"{shown}\"", self.line))
         })
     }
 
@@ -542,19 +454,13 @@ impl Body for Ascii<'_> {
 type Ignored = BTreeMap<u64, u64>;
 
 /// Reads every element in header order, keeping vertices and faces.
-fn read_body<B: Body>(
-    header: &Header,
-    plan: &Plan,
-    body: &mut B,
-) -> Result<(MeshData, Ignored), String> {
+fn read_body<B: Body>(header: &Header, plan: &Plan, body: &mut B) -> Result<(MeshData, Ignored), String> {
     let mut mesh = MeshData::default();
     let mut ignored = Ignored::new();
     for el in &header.elements {
         match (el.name.as_str(), plan.face_list) {
             ("vertex", _) => read_vertices(el, plan, body, &mut mesh)?,
-            ("face", Some(list)) => {
-                read_faces(el, list, plan.vertex_count, body, &mut mesh, &mut ignored)?
-            }
+            ("face", Some(list)) => read_faces(el, list, plan.vertex_count, body, &mut mesh, &mut ignored)?,
             _ => skip_element(el, body)?,
         }
     }
@@ -563,17 +469,10 @@ fn read_body<B: Body>(
 
 /// How many of `el`'s records to reserve room for.
 fn capacity<B: Body>(el: &Element, body: &B) -> usize {
-    usize::try_from(el.count)
-        .unwrap_or(usize::MAX)
-        .min(body.max_records(el))
+    usize::try_from(el.count).unwrap_or(usize::MAX).min(body.max_records(el))
 }
 
-fn read_vertices<B: Body>(
-    el: &Element,
-    plan: &Plan,
-    body: &mut B,
-    mesh: &mut MeshData,
-) -> Result<(), String> {
+fn read_vertices<B: Body>(el: &Element, plan: &Plan, body: &mut B, mesh: &mut MeshData) -> Result<(), String> {
     let cap = capacity(el, body);
     mesh.positions.reserve(cap);
     mesh.normals.reserve(if plan.normals { cap } else { 0 });
@@ -640,14 +539,10 @@ fn read_faces<B: Body>(
 /// Checks a vertex index read from face `face` and narrows it.
 fn vertex_ref(raw: f64, face: u64, vertex_count: u64) -> Result<u32, String> {
     if raw.fract() != 0.0 {
-        return Err(format!(
-            "face {face} has vertex index {raw}, which is not a whole number"
-        ));
+        return Err(format!("face {face} has vertex index {raw}, which is not a whole number"));
     }
     if raw < 0.0 || raw >= vertex_count as f64 {
-        return Err(format!(
-            "face {face} references vertex {raw}, but there are {vertex_count} vertices"
-        ));
+        return Err(format!("face {face} references vertex {raw}, but there are {vertex_count} vertices"));
     }
     Ok(raw as u32)
 }
@@ -700,11 +595,7 @@ mod tests {
 
     fn temp_file(bytes: &[u8]) -> TempFile {
         static N: AtomicUsize = AtomicUsize::new(0);
-        let name = format!(
-            "cachert-ply-test-{}-{}.ply",
-            std::process::id(),
-            N.fetch_add(1, Ordering::Relaxed)
-        );
+        let name = format!("cachert-ply-test-{}-{}.ply", std::process::id(), N.fetch_add(1, Ordering::Relaxed));
         let path = std::env::temp_dir().join(name);
         std::fs::write(&path, bytes).unwrap();
         TempFile(path)
@@ -753,11 +644,7 @@ mod tests {
         for v in values {
             macro_rules! put {
                 ($x:expr) => {
-                    out.extend_from_slice(&if big {
-                        $x.to_be_bytes()
-                    } else {
-                        $x.to_le_bytes()
-                    })
+                    out.extend_from_slice(&if big { $x.to_be_bytes() } else { $x.to_le_bytes() })
                 };
             }
             match *v {
@@ -790,20 +677,7 @@ mod tests {
 
     fn square_body(big: bool) -> Vec<u8> {
         use V::*;
-        let mut v = vec![
-            F(0.),
-            F(0.),
-            F(0.),
-            F(1.),
-            F(0.),
-            F(0.),
-            F(1.),
-            F(1.),
-            F(0.),
-            F(0.),
-            F(1.),
-            F(0.),
-        ];
+        let mut v = vec![F(0.), F(0.), F(0.), F(1.), F(0.), F(0.), F(1.), F(1.), F(0.), F(0.), F(1.), F(0.)];
         v.extend([B(3), I(0), I(1), I(2), B(3), I(0), I(2), I(3)]);
         binary(&v, big)
     }
@@ -835,25 +709,10 @@ mod tests {
 
     #[test]
     fn binary_little_and_big_endian_read_the_same() {
-        assert_eq!(
-            ok(&file(
-                &square("binary_little_endian", 4, 2),
-                &square_body(false)
-            )),
-            square_mesh()
-        );
-        assert_eq!(
-            ok(&file(
-                &square("binary_big_endian", 4, 2),
-                &square_body(true)
-            )),
-            square_mesh()
-        );
+        assert_eq!(ok(&file(&square("binary_little_endian", 4, 2), &square_body(false))), square_mesh());
+        assert_eq!(ok(&file(&square("binary_big_endian", 4, 2), &square_body(true))), square_mesh());
         let ascii = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n";
-        assert_eq!(
-            ok(&file(&square("ascii", 4, 2), ascii.as_bytes())),
-            square_mesh()
-        );
+        assert_eq!(ok(&file(&square("ascii", 4, 2), ascii.as_bytes())), square_mesh());
     }
 
     #[test]
@@ -877,41 +736,27 @@ mod tests {
 
     #[test]
     fn a_quad_is_split_like_pbrt() {
-        let text = format!(
-            "{}0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n",
-            square("ascii", 4, 1)
-        );
+        let text = format!("{}0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n", square("ascii", 4, 1));
         assert_eq!(ok(text.as_bytes()).indices, vec![0, 1, 2, 3, 0, 2]);
     }
 
     #[test]
     fn other_polygons_are_skipped_with_one_warning() {
-        let text = format!(
-            "{}0 0 0\n1 0 0\n1 1 0\n0 1 0\n5 0 1 2 3 0\n3 0 1 2\n5 3 2 1 0 3\n",
-            square("ascii", 4, 3)
-        );
+        let text = format!("{}0 0 0\n1 0 0\n1 1 0\n0 1 0\n5 0 1 2 3 0\n3 0 1 2\n5 3 2 1 0 3\n", square("ascii", 4, 3));
         let (mesh, warnings) = read(text.as_bytes());
         assert_eq!(mesh.unwrap().indices, vec![0, 1, 2]);
         let texts = warning_texts(&warnings);
         assert_eq!(texts.len(), 1, "{texts:?}");
         assert!(
-            texts[0].ends_with(
-                "plymesh: ignored 2 faces with 5 vertices (only triangles and quads are supported)"
-            ),
+            texts[0].ends_with("plymesh: ignored 2 faces with 5 vertices (only triangles and quads are supported)"),
             "{texts:?}"
         );
         // Several sizes still make one warning.
-        let text = format!(
-            "{}0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 1\n3 0 1 2\n6 0 1 2 3 0 1\n",
-            square("ascii", 4, 3)
-        );
+        let text = format!("{}0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 1\n3 0 1 2\n6 0 1 2 3 0 1\n", square("ascii", 4, 3));
         let (_, warnings) = read(text.as_bytes());
         let texts = warning_texts(&warnings);
         assert_eq!(texts.len(), 1);
-        assert!(
-            texts[0].contains("ignored 1 face with 2 vertices, 1 face with 6 vertices"),
-            "{texts:?}"
-        );
+        assert!(texts[0].contains("ignored 1 face with 2 vertices, 1 face with 6 vertices"), "{texts:?}");
     }
 
     #[test]
@@ -919,10 +764,7 @@ mod tests {
         let body = square_body(false);
         let header = square("binary_little_endian", 4, 2);
         let cut = |n: usize| err(&file(&header, &body[..body.len() - n]));
-        assert_eq!(
-            cut(1),
-            "file ends after 1 of 2 faces (the file is truncated, or its header is wrong)"
-        );
+        assert_eq!(cut(1), "file ends after 1 of 2 faces (the file is truncated, or its header is wrong)");
         assert!(cut(13).starts_with("file ends after 1 of 2 faces"));
         assert!(cut(14).starts_with("file ends after 0 of 2 faces"));
         assert!(cut(30).starts_with("file ends after 3 of 4 vertices"));
@@ -933,30 +775,15 @@ mod tests {
 
     #[test]
     fn an_out_of_range_index_is_an_error() {
-        let text = format!(
-            "{}0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 4\n",
-            square("ascii", 4, 2)
-        );
-        assert_eq!(
-            err(text.as_bytes()),
-            "face 1 references vertex 4, but there are 4 vertices"
-        );
-        let text = format!(
-            "{}0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 -1 2\n",
-            square("ascii", 4, 1)
-        );
-        assert_eq!(
-            err(text.as_bytes()),
-            "face 0 references vertex -1, but there are 4 vertices"
-        );
+        let text = format!("{}0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 4\n", square("ascii", 4, 2));
+        assert_eq!(err(text.as_bytes()), "face 1 references vertex 4, but there are 4 vertices");
+        let text = format!("{}0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 -1 2\n", square("ascii", 4, 1));
+        assert_eq!(err(text.as_bytes()), "face 0 references vertex -1, but there are 4 vertices");
         let header = square("binary_little_endian", 4, 2).replace("uchar int", "uchar float");
         let mut body = square_body(false);
         body.truncate(48);
         body.extend(binary(&[V::B(3), V::F(0.), V::F(1.5), V::F(2.)], false));
-        assert_eq!(
-            err(&file(&header, &body)),
-            "face 0 has vertex index 1.5, which is not a whole number"
-        );
+        assert_eq!(err(&file(&header, &body)), "face 0 has vertex index 1.5, which is not a whole number");
     }
 
     #[test]
@@ -964,69 +791,34 @@ mod tests {
         let body = square_body(false);
         let huge = 1u64 << 40;
         let msg = err(&file(&square("binary_little_endian", huge, 2), &body));
-        assert_eq!(
-            msg,
-            format!("the header declares {huge} vertices; at most 4294967295 are supported")
-        );
-        let msg = err(&file(
-            &square("binary_little_endian", 4_000_000_000, 2),
-            &body,
-        ));
-        assert!(
-            msg.starts_with("file ends after 6 of 4000000000 vertices"),
-            "{msg}"
-        );
+        assert_eq!(msg, format!("the header declares {huge} vertices; at most 4294967295 are supported"));
+        let msg = err(&file(&square("binary_little_endian", 4_000_000_000, 2), &body));
+        assert!(msg.starts_with("file ends after 6 of 4000000000 vertices"), "{msg}");
         let msg = err(&file(&square("binary_little_endian", 4, huge), &body));
-        assert!(
-            msg.starts_with(&format!("file ends after 2 of {huge} faces")),
-            "{msg}"
-        );
-        let msg = err(&file(
-            &square("ascii", 4, huge),
-            b"0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n",
-        ));
-        assert!(
-            msg.starts_with(&format!("file ends after 1 of {huge} faces")),
-            "{msg}"
-        );
+        assert!(msg.starts_with(&format!("file ends after 2 of {huge} faces")), "{msg}");
+        let msg = err(&file(&square("ascii", 4, huge), b"0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n"));
+        assert!(msg.starts_with(&format!("file ends after 1 of {huge} faces")), "{msg}");
         // An unknown element is skipped record by record, so it also stops at the end of the data.
-        let header = square("binary_little_endian", 4, 2).replace(
-            "end_header",
-            "element junk 1099511627776\nproperty list int double j\nend_header",
-        );
+        let header = square("binary_little_endian", 4, 2)
+            .replace("end_header", "element junk 1099511627776\nproperty list int double j\nend_header");
         let msg = err(&file(&header, &body));
-        assert!(
-            msg.starts_with("file ends after 0 of 1099511627776 \"junk\" elements"),
-            "{msg}"
-        );
+        assert!(msg.starts_with("file ends after 0 of 1099511627776 \"junk\" elements"), "{msg}");
         // A list length that runs past the end of the data.
         let mut body = square_body(false);
         body.truncate(48);
         body.extend(binary(&[V::B(255), V::I(0)], false));
-        assert!(
-            err(&file(&square("binary_little_endian", 4, 1), &body))
-                .starts_with("file ends after 0 of 1 faces")
-        );
+        assert!(err(&file(&square("binary_little_endian", 4, 1), &body)).starts_with("file ends after 0 of 1 faces"));
     }
 
     #[test]
     fn files_that_are_not_ply_are_refused() {
-        assert_eq!(
-            err(b"OFF\n3 1 0\n"),
-            "not a PLY file (the first line is not \"ply\")"
-        );
+        assert_eq!(err(b"OFF\n3 1 0\n"), "not a PLY file (the first line is not \"ply\")");
         assert_eq!(err(b""), "not a PLY file (the first line is not \"ply\")");
-        assert_eq!(
-            err(b"plyx\n"),
-            "not a PLY file (the first line is not \"ply\")"
-        );
+        assert_eq!(err(b"plyx\n"), "not a PLY file (the first line is not \"ply\")");
         let mut warnings = Warnings::default();
         let missing = std::env::temp_dir().join("cachert-ply-test-does-not-exist.ply");
         let e = read_ply(&missing, &mut warnings).unwrap_err().to_string();
-        assert!(
-            e.starts_with(&format!("{}: cannot read PLY file: ", missing.display())),
-            "{e}"
-        );
+        assert!(e.starts_with(&format!("{}: cannot read PLY file: ", missing.display())), "{e}");
     }
 
     #[test]
@@ -1038,78 +830,30 @@ mod tests {
             "header line 2: unsupported format \"binary_middle_endian\" \
              (expected ascii, binary_little_endian or binary_big_endian)"
         );
-        assert_eq!(
-            bad(" 1.0", " 2.0"),
-            "header line 2: unsupported PLY version \"2.0\" (only 1.0 is known)"
-        );
-        assert_eq!(
-            bad("format binary_little_endian 1.0\n", ""),
-            "the header has no format line"
-        );
-        assert_eq!(
-            bad("property float z", "property float w"),
-            "the vertex element has no \"z\" property"
-        );
-        assert_eq!(
-            bad("property float z", "property list uchar float z"),
-            "the vertex element has no \"z\" property"
-        );
-        assert_eq!(
-            bad("float y", "float4 y"),
-            "header line 5: unknown property type \"float4\""
-        );
-        assert_eq!(
-            bad("list uchar", "list float"),
-            "header line 8: list length type \"float\" is not an integer type"
-        );
-        assert_eq!(
-            bad("vertex_indices", "indices"),
-            "the face element has no \"vertex_indices\" list property"
-        );
+        assert_eq!(bad(" 1.0", " 2.0"), "header line 2: unsupported PLY version \"2.0\" (only 1.0 is known)");
+        assert_eq!(bad("format binary_little_endian 1.0\n", ""), "the header has no format line");
+        assert_eq!(bad("property float z", "property float w"), "the vertex element has no \"z\" property");
+        assert_eq!(bad("property float z", "property list uchar float z"), "the vertex element has no \"z\" property");
+        assert_eq!(bad("float y", "float4 y"), "header line 5: unknown property type \"float4\"");
+        assert_eq!(bad("list uchar", "list float"), "header line 8: list length type \"float\" is not an integer type");
+        assert_eq!(bad("vertex_indices", "indices"), "the face element has no \"vertex_indices\" list property");
         assert_eq!(
             bad("vertex 4", "vertex four"),
             "header line 3: element count \"four\" is not a non-negative integer"
         );
-        assert_eq!(
-            bad("element vertex", "elephant vertex"),
-            "header line 3: unknown header keyword \"elephant\""
-        );
-        assert_eq!(
-            bad("element vertex 4\n", ""),
-            "header line 3: a property before any element"
-        );
-        assert_eq!(
-            bad("element face 2", "element vertex 2"),
-            "header line 7: a second \"vertex\" element"
-        );
-        assert_eq!(
-            bad("element vertex 4", "element points 4"),
-            "no \"vertex\" element in the header"
-        );
-        assert_eq!(
-            bad("end_header", "end"),
-            "header line 9: unknown header keyword \"end\""
-        );
-        assert_eq!(
-            bad("end_header\n", "end_header"),
-            "the header has no end_header line"
-        );
+        assert_eq!(bad("element vertex", "elephant vertex"), "header line 3: unknown header keyword \"elephant\"");
+        assert_eq!(bad("element vertex 4\n", ""), "header line 3: a property before any element");
+        assert_eq!(bad("element face 2", "element vertex 2"), "header line 7: a second \"vertex\" element");
+        assert_eq!(bad("element vertex 4", "element points 4"), "no \"vertex\" element in the header");
+        assert_eq!(bad("end_header", "end"), "header line 9: unknown header keyword \"end\"");
+        assert_eq!(bad("end_header\n", "end_header"), "the header has no end_header line");
     }
 
     #[test]
     fn malformed_ascii_numbers_give_the_line() {
-        let text = format!(
-            "{}0 0 0\n1 0 0\n1 1.0abc 0\n0 1 0\n3 0 1 2\n",
-            square("ascii", 4, 1)
-        );
-        assert_eq!(
-            err(text.as_bytes()),
-            "line 12: expected a number, found \"1.0abc\" (property \"y\" of vertex 2)"
-        );
-        let text = format!(
-            "{}0 0 0\n1 0 0\n1 1 0\n0 1 0\n\n3 0 1.0 2\n",
-            square("ascii", 4, 1)
-        );
+        let text = format!("{}0 0 0\n1 0 0\n1 1.0abc 0\n0 1 0\n3 0 1 2\n", square("ascii", 4, 1));
+        assert_eq!(err(text.as_bytes()), "line 12: expected a number, found \"1.0abc\" (property \"y\" of vertex 2)");
+        let text = format!("{}0 0 0\n1 0 0\n1 1 0\n0 1 0\n\n3 0 1.0 2\n", square("ascii", 4, 1));
         assert_eq!(
             err(text.as_bytes()),
             "line 15: expected an integer, found \"1.0\" (property \"vertex_indices\" of face 0)"
@@ -1118,14 +862,8 @@ mod tests {
 
     #[test]
     fn non_finite_positions_are_errors() {
-        let text = format!(
-            "{}0 0 0\n1 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n",
-            square("ascii", 4, 1)
-        );
-        assert_eq!(
-            err(text.as_bytes()),
-            "vertex 2 has a non-finite position (1, NaN, 0)"
-        );
+        let text = format!("{}0 0 0\n1 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n", square("ascii", 4, 1));
+        assert_eq!(err(text.as_bytes()), "vertex 2 has a non-finite position (1, NaN, 0)");
         let mut body = square_body(true);
         body[20..24].copy_from_slice(&f32::INFINITY.to_be_bytes());
         let msg = err(&file(&square("binary_big_endian", 4, 2), &body));
@@ -1144,9 +882,9 @@ mod tests {
         assert_eq!(mesh.positions.len(), 3);
         let texts = warning_texts(&warnings);
         assert_eq!(texts.len(), 1);
-        assert!(texts[0].ends_with(
-            "2 of 3 vertex normals are NaN, infinite or zero; ignoring all normals of this mesh"
-        ));
+        assert!(
+            texts[0].ends_with("2 of 3 vertex normals are NaN, infinite or zero; ignoring all normals of this mesh")
+        );
     }
 
     #[test]
@@ -1159,38 +897,17 @@ mod tests {
                       property list int uint16 vertex_indices\nproperty list uchar int face_indices\n\
                       element edge 1\nproperty int a\nproperty int b\nend_header\n";
         let mut v = vec![US(2), F(0.5), F(0.25), C(1), US(0), C(2)];
-        v.extend([
-            C(-1),
-            US(0),
-            D(0.5),
-            B(255),
-            S(2),
-            I(7),
-            I(8),
-            I(0),
-            U(0),
-            S(-1),
-        ]);
+        v.extend([C(-1), US(0), D(0.5), B(255), S(2), I(7), I(8), I(0), U(0), S(-1)]);
         v.extend([C(1), US(65535), D(0.0), B(0), S(0), I(0), U(1), S(0)]);
         v.extend([C(0), US(3), D(-2.0), B(9), S(1), I(-9), I(0), U(0), S(5)]);
         v.extend([B(1), I(3), US(0), US(1), US(2), B(1), I(0)]);
         v.extend([B(0), I(3), US(2), US(1), US(0), B(0)]);
         v.extend([I(0), I(1)]);
         for big in [false, true] {
-            let header = if big {
-                header.replace("little", "big")
-            } else {
-                header.to_string()
-            };
+            let header = if big { header.replace("little", "big") } else { header.to_string() };
             let mesh = ok(&file(&header, &binary(&v, big)));
-            assert_eq!(
-                mesh.positions,
-                vec![[-1., 0., 0.5], [1., 65535., 0.], [0., 3., -2.]]
-            );
-            assert_eq!(
-                mesh.normals,
-                vec![[0., 0., -1.], [0., 1., 0.], [0., 0., 5.]]
-            );
+            assert_eq!(mesh.positions, vec![[-1., 0., 0.5], [1., 65535., 0.], [0., 3., -2.]]);
+            assert_eq!(mesh.normals, vec![[0., 0., -1.], [0., 1., 0.], [0., 0., 5.]]);
             assert_eq!(mesh.indices, vec![0, 1, 2, 2, 1, 0]);
         }
     }
@@ -1213,17 +930,12 @@ mod tests {
         let mesh = mesh.unwrap();
         assert_eq!(mesh.triangle_count(), 0);
         assert_eq!(mesh.positions, vec![[1., 2., 3.]]);
-        assert!(
-            warning_texts(&warnings)[0]
-                .ends_with("plymesh: the file has no triangles, so the shape is empty")
-        );
+        assert!(warning_texts(&warnings)[0].ends_with("plymesh: the file has no triangles, so the shape is empty"));
     }
 
     /// `../shared/scenes/<dir>` beside the repository, or `None` (with the reason printed) when it is absent.
     fn scene_dir(dir: &str) -> Option<PathBuf> {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../shared/scenes")
-            .join(dir);
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes").join(dir);
         if path.is_dir() {
             Some(path)
         } else {
@@ -1274,10 +986,7 @@ mod tests {
         }
         if let Some(dir) = scene_dir("mcguire-sibenik-geometry") {
             let mesh = read_ply(&dir.join("sibenik-ply.ply"), &mut Warnings::default()).unwrap();
-            assert_eq!(
-                (mesh.positions.len(), mesh.triangle_count()),
-                (40_981, 75_284)
-            );
+            assert_eq!((mesh.positions.len(), mesh.triangle_count()), (40_981, 75_284));
             assert!(mesh.normals.is_empty() && mesh.uvs.is_empty());
         }
     }
@@ -1290,10 +999,7 @@ mod tests {
         let mut warnings = Warnings::default();
         let mesh = read_ply(&dir.join("buddha.ply"), &mut warnings).unwrap();
         assert!(warnings.is_empty(), "{warnings:?}");
-        assert_eq!(
-            (mesh.positions.len(), mesh.triangle_count()),
-            (89_670, 29_890)
-        );
+        assert_eq!((mesh.positions.len(), mesh.triangle_count()), (89_670, 29_890));
         assert_eq!((mesh.normals.len(), mesh.uvs.len()), (89_670, 89_670));
     }
 
@@ -1310,19 +1016,9 @@ mod tests {
         }
         for _ in 0..3 {
             let start = std::time::Instant::now();
-            let triangles: usize = files
-                .iter()
-                .map(|f| {
-                    read_ply(f, &mut Warnings::default())
-                        .unwrap()
-                        .triangle_count()
-                })
-                .sum();
-            eprintln!(
-                "read {} files, {triangles} triangles in {:.1?}",
-                files.len(),
-                start.elapsed()
-            );
+            let triangles: usize =
+                files.iter().map(|f| read_ply(f, &mut Warnings::default()).unwrap().triangle_count()).sum();
+            eprintln!("read {} files, {triangles} triangles in {:.1?}", files.len(), start.elapsed());
         }
     }
 }

@@ -156,7 +156,8 @@ impl QuadricKind {
     /// Object-space bounding box (min, max).
     pub fn bounds(&self) -> (DVec3, DVec3) {
         match *self {
-            QuadricKind::Sphere { radius: r, z_min, z_max, .. } | QuadricKind::Cylinder { radius: r, z_min, z_max, .. } => {
+            QuadricKind::Sphere { radius: r, z_min, z_max, .. }
+            | QuadricKind::Cylinder { radius: r, z_min, z_max, .. } => {
                 (DVec3::new(-r, -r, z_min), DVec3::new(r, r, z_max))
             }
             QuadricKind::Disk { height, radius: r, .. } => (DVec3::new(-r, -r, height), DVec3::new(r, r, height)),
@@ -183,7 +184,12 @@ impl QuadricKind {
             QuadricKind::Cylinder { radius: r, z_min, z_max, phi_max } => {
                 let dpdu = DVec3::new(-phi_max * p.y, phi_max * p.x, 0.0);
                 let v = (p.z - z_min) / (z_max - z_min);
-                (DVec3::new(p.x / r, p.y / r, 0.0), dpdu, [phi / phi_max, v], DVec3::new(p.x, p.y, 0.0).abs() * gamma(3) as f64)
+                (
+                    DVec3::new(p.x / r, p.y / r, 0.0),
+                    dpdu,
+                    [phi / phi_max, v],
+                    DVec3::new(p.x, p.y, 0.0).abs() * gamma(3) as f64,
+                )
             }
         }
     }
@@ -202,7 +208,8 @@ impl Quadric {
     /// World-space surface data at a hit.
     pub fn surface(&self, hit: &QuadricHit) -> QuadricSurface {
         let (n, dpdu, uv, err) = self.kind.surface(hit.p);
-        let (p, p_error) = transform_point_with_error(&self.world_from_object, hit.p.as_vec3().into(), err.as_vec3().into());
+        let (p, p_error) =
+            transform_point_with_error(&self.world_from_object, hit.p.as_vec3().into(), err.as_vec3().into());
         let mut n = transform_normal(&self.world_from_object, n.as_vec3().into());
         if self.flip_normal {
             n = -n;
@@ -267,7 +274,10 @@ mod tests {
 
     #[test]
     fn sphere_hits_front_then_back_and_respects_cuts() {
-        let s = placed(QuadricKind::Sphere { radius: 2.0, z_min: -2.0, z_max: 2.0, phi_max: TAU }, Affine3A::from_translation(glam::Vec3::new(0.0, 0.0, 10.0)));
+        let s = placed(
+            QuadricKind::Sphere { radius: 2.0, z_min: -2.0, z_max: 2.0, phi_max: TAU },
+            Affine3A::from_translation(glam::Vec3::new(0.0, 0.0, 10.0)),
+        );
         let h = s.intersect(&Ray::new(Vec3A::ZERO, Vec3A::Z)).unwrap();
         assert!((h.t - 8.0).abs() < 1e-5);
         let surf = s.surface(&h);
@@ -282,7 +292,10 @@ mod tests {
 
     #[test]
     fn rays_leaving_a_sphere_do_not_hit_it_again() {
-        let s = placed(QuadricKind::Sphere { radius: 1.0, z_min: -1.0, z_max: 1.0, phi_max: TAU }, Affine3A::from_translation(glam::Vec3::new(3.0, -2.0, 7.0)));
+        let s = placed(
+            QuadricKind::Sphere { radius: 1.0, z_min: -1.0, z_max: 1.0, phi_max: TAU },
+            Affine3A::from_translation(glam::Vec3::new(3.0, -2.0, 7.0)),
+        );
         let mut misses = 0;
         for i in 0..500 {
             let a = i as f32 * 0.37;
@@ -302,7 +315,8 @@ mod tests {
 
     #[test]
     fn disk_and_cylinder() {
-        let d = placed(QuadricKind::Disk { height: 1.0, radius: 2.0, inner_radius: 0.5, phi_max: TAU }, Affine3A::IDENTITY);
+        let d =
+            placed(QuadricKind::Disk { height: 1.0, radius: 2.0, inner_radius: 0.5, phi_max: TAU }, Affine3A::IDENTITY);
         assert!(d.intersect(&Ray::new(Vec3A::new(1.0, 0.0, 0.0), Vec3A::Z)).is_some());
         assert!(d.intersect(&Ray::new(Vec3A::new(0.2, 0.0, 0.0), Vec3A::Z)).is_none(), "hole");
         let c = placed(QuadricKind::Cylinder { radius: 1.0, z_min: 0.0, z_max: 1.0, phi_max: TAU }, Affine3A::IDENTITY);
