@@ -17,6 +17,7 @@
 
 pub mod cli;
 pub mod error;
+pub mod gbuffer;
 pub mod image;
 pub mod metrics;
 pub mod parse;

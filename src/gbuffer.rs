@@ -1,0 +1,126 @@
+//! STAGE 3: the G-buffer — one shading point per pixel centre (ALGORITHMS.md §2), the input of every
+//! cache-placement strategy. A pixel whose camera ray leaves the scene is not valid.
+//!
+//! Depends on `scene` (camera rays, intersections); placement code reads only these plain types, so tests
+//! can build synthetic G-buffers with [`GBuffer::from_fn`].
+
+use glam::Vec3A;
+use rayon::prelude::*;
+
+use crate::scene::Scene;
+
+/// Index of a pixel in a G-buffer: `y * width + x`.
+pub type PixelId = u32;
+
+/// The surface seen through one pixel centre.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingPoint {
+    /// World position.
+    pub p: Vec3A,
+    /// Absolute error bound of `p` (for spawning rays).
+    pub p_error: Vec3A,
+    /// Unit shading normal, faced toward the camera.
+    pub n: Vec3A,
+    /// Unit geometric normal, faced toward the camera.
+    pub ng: Vec3A,
+    /// Unit direction from `p` toward the camera.
+    pub wo: Vec3A,
+    /// Distance from the camera position to `p`.
+    pub depth: f32,
+    /// Surface (u, v).
+    pub uv: [f32; 2],
+    /// Material id.
+    pub material: u32,
+}
+
+/// One shading point per pixel of the (cropped) image.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GBuffer {
+    /// Image width in pixels.
+    pub width: usize,
+    /// Image height in pixels.
+    pub height: usize,
+    /// `Some` where the pixel centre sees a surface; row-major, top row first.
+    pub points: Vec<Option<ShadingPoint>>,
+    /// Number of valid pixels (ALGORITHMS.md's P).
+    pub valid_count: usize,
+    /// Smallest and largest depth over valid pixels ((0, 0) when none is valid).
+    pub depth_range: (f32, f32),
+    /// Diagonal of the scene's bounding box (ALGORITHMS.md's L).
+    pub scene_diagonal: f32,
+}
+
+impl GBuffer {
+    /// Builds a G-buffer from a function of (x, y) — for tests and synthetic inputs.
+    pub fn from_fn(width: usize, height: usize, scene_diagonal: f32, f: impl Fn(usize, usize) -> Option<ShadingPoint>) -> Self {
+        let points = (0..width * height).map(|i| f(i % width, i / width)).collect();
+        Self::finish(width, height, points, scene_diagonal)
+    }
+
+    /// Traces one primary ray through every pixel centre of `scene`'s cropped film (passing through
+    /// surfaces without a material, as the integrators do).
+    pub fn from_scene(scene: &Scene) -> Self {
+        let b = scene.film.cropped_bounds();
+        let [w, h] = b.size();
+        let cam = scene.camera.position();
+        let points = (0..w * h)
+            .into_par_iter()
+            .map(|i| {
+                let p_film = [(b.min[0] + (i % w) as i32) as f32 + 0.5, (b.min[1] + (i / w) as i32) as f32 + 0.5];
+                let mut ray = scene.camera.generate_ray(p_film, [0.5, 0.5]);
+                for _ in 0..1024 {
+                    let si = scene.geometry.intersect(&ray)?;
+                    if scene.is_null_material(si.material) {
+                        ray = si.spawn_ray(ray.d);
+                        continue;
+                    }
+                    let wo = -ray.d.normalize();
+                    let face = |n: Vec3A| if n.dot(wo) < 0.0 { -n } else { n };
+                    return Some(ShadingPoint {
+                        p: si.p,
+                        p_error: si.p_error,
+                        n: face(si.ns),
+                        ng: face(si.ng),
+                        wo,
+                        depth: (si.p - cam).length(),
+                        uv: si.uv,
+                        material: si.material,
+                    });
+                }
+                None
+            })
+            .collect();
+        Self::finish(w, h, points, scene.diagonal())
+    }
+
+    fn finish(width: usize, height: usize, points: Vec<Option<ShadingPoint>>, scene_diagonal: f32) -> Self {
+        let valid_count = points.iter().filter(|p| p.is_some()).count();
+        let depth_range = points.iter().flatten().fold(None, |r: Option<(f32, f32)>, p| {
+            Some(r.map_or((p.depth, p.depth), |(lo, hi)| (lo.min(p.depth), hi.max(p.depth))))
+        });
+        GBuffer { width, height, points, valid_count, depth_range: depth_range.unwrap_or((0.0, 0.0)), scene_diagonal }
+    }
+
+    /// The pixel id of (x, y).
+    #[inline]
+    pub fn id(&self, x: usize, y: usize) -> PixelId {
+        (y * self.width + x) as PixelId
+    }
+
+    /// The (x, y) of a pixel id.
+    #[inline]
+    pub fn xy(&self, id: PixelId) -> (usize, usize) {
+        (id as usize % self.width, id as usize / self.width)
+    }
+
+    /// The shading point of pixel `id`, if valid.
+    #[inline]
+    pub fn get(&self, id: PixelId) -> Option<&ShadingPoint> {
+        self.points.get(id as usize).and_then(|p| p.as_ref())
+    }
+
+    /// The ids of all valid pixels, in order.
+    pub fn valid_ids(&self) -> Vec<PixelId> {
+        self.points.iter().enumerate().filter(|(_, p)| p.is_some()).map(|(i, _)| i as PixelId).collect()
+    }
+}
