@@ -15,12 +15,14 @@
 //! panics.
 #![deny(missing_docs)]
 
+pub mod cache;
 pub mod cli;
 pub mod error;
 pub mod gbuffer;
 pub mod image;
 pub mod metrics;
 pub mod parse;
+pub mod placement;
 pub mod render;
 pub mod sampling;
 pub mod scene;
