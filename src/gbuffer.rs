@@ -52,7 +52,12 @@ pub struct GBuffer {
 
 impl GBuffer {
     /// Builds a G-buffer from a function of (x, y) — for tests and synthetic inputs.
-    pub fn from_fn(width: usize, height: usize, scene_diagonal: f32, f: impl Fn(usize, usize) -> Option<ShadingPoint>) -> Self {
+    pub fn from_fn(
+        width: usize,
+        height: usize,
+        scene_diagonal: f32,
+        f: impl Fn(usize, usize) -> Option<ShadingPoint>,
+    ) -> Self {
         let points = (0..width * height).map(|i| f(i % width, i / width)).collect();
         Self::finish(width, height, points, scene_diagonal)
     }

@@ -35,6 +35,16 @@ pub struct RenderArgs {
     /// Integrator to use instead of the scene's (e.g. ambientocclusion).
     #[arg(long)]
     pub integrator: Option<String>,
+    /// Set an integrator parameter, overriding the scene file (repeatable), e.g. --set nsamples=16.
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_key_value)]
+    pub set: Vec<(String, String)>,
+}
+
+fn parse_key_value(s: &str) -> std::result::Result<(String, String), String> {
+    match s.split_once('=') {
+        Some((k, v)) if !k.trim().is_empty() => Ok((k.trim().to_string(), v.trim().to_string())),
+        _ => Err(format!("expected KEY=VALUE, found \"{s}\"")),
+    }
 }
 
 /// Runs `cachert render`; returns the summary to print (empty with --quiet) and the warnings, already printed.
@@ -48,6 +58,7 @@ pub fn run(args: &RenderArgs) -> Result<String> {
         progress: !args.quiet && std::io::stderr().is_terminal() && std::io::stdout().is_terminal(),
         quick: args.quick,
         integrator: args.integrator.clone(),
+        set: args.set.clone(),
     };
     // Settle the output name before rendering, so a bad extension fails fast.
     let out = output_path(args, &loaded.scene.film.filename);

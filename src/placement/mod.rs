@@ -114,7 +114,15 @@ pub struct AdaptiveInfo {
 /// adds is evaluated through `oracle.evaluate` before it returns.
 pub trait AdaptivePlacement: Debug + Sync {
     /// Adds up to `budget` caches (exactly `budget` when enough free valid pixels exist).
-    fn place(&self, g: &GBuffer, stage1: &Stage1, oracle: &mut dyn CacheOracle, budget: usize, params: &PlacementParams, seed: u64) -> Result<AdaptiveInfo>;
+    fn place(
+        &self,
+        g: &GBuffer,
+        stage1: &Stage1,
+        oracle: &mut dyn CacheOracle,
+        budget: usize,
+        params: &PlacementParams,
+        seed: u64,
+    ) -> Result<AdaptiveInfo>;
 }
 
 /// How the VGC angular split measures and splits normals (ALGORITHMS.md §4.4, ambiguity A4).

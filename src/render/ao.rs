@@ -8,13 +8,13 @@
 use glam::Vec3A;
 
 use crate::error::{Error, Result};
-use crate::parse::ParamList;
 use crate::sampling::Frame;
 use crate::sampling::warp::{UNIFORM_HEMISPHERE_PDF, cosine_hemisphere, cosine_hemisphere_pdf, uniform_hemisphere};
 use crate::scene::Scene;
 use crate::scene::ray::Ray;
 use crate::scene::sampler::SamplerSpec;
 
+use super::params::IntegratorParams;
 use super::samples::PixelSamples;
 use super::{PixelIntegrator, RayCounters};
 
@@ -43,17 +43,17 @@ const MAX_PASS_THROUGH: usize = 1024;
 
 impl AmbientOcclusion {
     /// Reads the integrator's parameters; `quick` sets nsamples to 1 as pbrt-v3's `--quick` does.
-    pub fn from_params(p: &ParamList, sampler: &SamplerSpec, quick: bool) -> Result<Self> {
+    pub fn from_params(p: &IntegratorParams<'_>, sampler: &SamplerSpec, quick: bool) -> Result<Self> {
         let n = p.int_or("nsamples", 64)?;
         if !(1..=MAX_AO_SAMPLES).contains(&n) {
-            let loc = p.loc_of("nsamples").map(|l| l.to_string() + ": ").unwrap_or_default();
+            let loc = p.at("nsamples");
             return Err(Error::usage(format!(
                 "{loc}ambientocclusion: \"nsamples\" must be between 1 and {MAX_AO_SAMPLES}, got {n}"
             )));
         }
         let max_distance = p.float_or("maxdistance", f64::INFINITY)? as f32;
         if !(max_distance > 0.0) {
-            let loc = p.loc_of("maxdistance").map(|l| l.to_string() + ": ").unwrap_or_default();
+            let loc = p.at("maxdistance");
             return Err(Error::usage(format!(
                 "{loc}ambientocclusion: \"maxdistance\" must be positive, got {max_distance}"
             )));

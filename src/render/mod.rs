@@ -6,6 +6,7 @@
 pub mod ao;
 mod driver;
 pub mod film;
+pub mod params;
 pub mod samples;
 
 pub use driver::render_image;
@@ -67,6 +68,8 @@ pub struct RenderSettings {
     pub quick: bool,
     /// Integrator name instead of the scene's.
     pub integrator: Option<String>,
+    /// Integrator parameters set on the command line (`--set key=value`), overriding the scene's.
+    pub set: Vec<(String, String)>,
 }
 
 /// What a render produced.
@@ -109,8 +112,9 @@ pub fn render(
         }
         sampler.spp = spp;
     }
+    let iparams = params::IntegratorParams::new(params, &settings.set);
     let pixel: Box<dyn PixelIntegrator> = match name {
-        "ambientocclusion" => Box::new(ao::AmbientOcclusion::from_params(params, &sampler, settings.quick)?),
+        "ambientocclusion" => Box::new(ao::AmbientOcclusion::from_params(&iparams, &sampler, settings.quick)?),
         other => {
             return Err(Error::usage(format!(
                 "integrator \"{other}\" is not implemented by cachert (available: {}); choose one with --integrator",
@@ -118,6 +122,7 @@ pub fn render(
             )));
         }
     };
+    iparams.check_overrides(name)?;
     if let Some(n) = integrator.filter(|n| n.name == name) {
         for p in n.params.unused() {
             if p.name != "pixelbounds" {

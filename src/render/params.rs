@@ -1,0 +1,96 @@
+//! STAGE 6 (render): integrator parameters from two sources — the scene's `Integrator` directive and the
+//! command line's `--set key=value` — read through one typed interface. A `--set` value wins; a `--set` key
+//! the integrator does not read is an error naming the valid keys.
+
+use std::cell::RefCell;
+
+use crate::error::{Error, Result};
+use crate::parse::ParamList;
+
+/// Typed access to an integrator's parameters with command-line overrides.
+#[derive(Debug)]
+pub struct IntegratorParams<'a> {
+    scene: &'a ParamList,
+    overrides: &'a [(String, String)],
+    read: RefCell<Vec<&'static str>>,
+}
+
+impl<'a> IntegratorParams<'a> {
+    /// Wraps the scene's parameters and the `--set` pairs.
+    pub fn new(scene: &'a ParamList, overrides: &'a [(String, String)]) -> Self {
+        IntegratorParams { scene, overrides, read: RefCell::new(Vec::new()) }
+    }
+
+    fn cli(&self, name: &'static str) -> Option<&str> {
+        self.read.borrow_mut().push(name);
+        self.overrides.iter().rev().find(|(k, _)| k == name).map(|(_, v)| v.as_str())
+    }
+
+    fn bad(name: &str, v: &str, what: &str) -> Error {
+        Error::usage(format!("--set {name}={v}: expected {what}"))
+    }
+
+    /// An integer parameter.
+    pub fn int_or(&self, name: &'static str, default: i64) -> Result<i64> {
+        match self.cli(name) {
+            Some(v) => v.trim().parse().map_err(|_| Self::bad(name, v, "an integer")),
+            None => self.scene.int_or(name, default),
+        }
+    }
+
+    /// A float parameter.
+    pub fn float_or(&self, name: &'static str, default: f64) -> Result<f64> {
+        match self.cli(name) {
+            Some(v) => v.trim().parse().map_err(|_| Self::bad(name, v, "a number")),
+            None => self.scene.float_or(name, default),
+        }
+    }
+
+    /// An optional float parameter.
+    pub fn float(&self, name: &'static str) -> Result<Option<f64>> {
+        match self.cli(name) {
+            Some(v) => v.trim().parse().map(Some).map_err(|_| Self::bad(name, v, "a number")),
+            None => self.scene.float(name),
+        }
+    }
+
+    /// A bool parameter.
+    pub fn bool_or(&self, name: &'static str, default: bool) -> Result<bool> {
+        match self.cli(name) {
+            Some("true") => Ok(true),
+            Some("false") => Ok(false),
+            Some(v) => Err(Self::bad(name, v, "true or false")),
+            None => self.scene.bool_or(name, default),
+        }
+    }
+
+    /// A string parameter.
+    pub fn string_or(&self, name: &'static str, default: &str) -> Result<String> {
+        match self.cli(name) {
+            Some(v) => Ok(v.to_string()),
+            None => Ok(self.scene.string_or(name, default)?.to_string()),
+        }
+    }
+
+    /// Where a scene parameter was written, as a `file:line:col: ` prefix for messages (empty if not).
+    pub fn at(&self, name: &str) -> String {
+        self.scene.loc_of(name).map(|l| format!("{l}: ")).unwrap_or_default()
+    }
+
+    /// Errors on a `--set` key that no lookup asked for.
+    pub fn check_overrides(&self, integrator: &str) -> Result<()> {
+        let read = self.read.borrow();
+        for (k, v) in self.overrides {
+            if !read.iter().any(|r| r == k) {
+                let mut known: Vec<&str> = read.clone();
+                known.sort();
+                known.dedup();
+                return Err(Error::usage(format!(
+                    "--set {k}={v}: integrator \"{integrator}\" has no parameter \"{k}\" (it reads: {})",
+                    known.join(", ")
+                )));
+            }
+        }
+        Ok(())
+    }
+}
