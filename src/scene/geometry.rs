@@ -4,7 +4,7 @@
 
 use glam::Vec3A;
 
-use crate::scene::accel::{Accel, Hit, PrimRef};
+use crate::scene::accel::{Accel, Hit, OccluderHint, PrimRef};
 use crate::scene::mesh::TriangleMesh;
 use crate::scene::ray::{Ray, gamma, offset_ray_origin};
 use crate::scene::shapes::quadric::{QuadricHit, transform_normal, transform_point_with_error};
@@ -91,6 +91,12 @@ impl Geometry {
     #[inline]
     pub fn occluded(&self, ray: &Ray) -> bool {
         self.accel.occluded(ray)
+    }
+
+    /// [`Geometry::occluded`] with a hint: the last blocker found from the same point is tested first.
+    #[inline]
+    pub fn occluded_hinted(&self, ray: &Ray, hint: &mut OccluderHint) -> bool {
+        self.accel.occluded_hinted(ray, hint)
     }
 
     /// Total triangles stored (object definitions counted once).

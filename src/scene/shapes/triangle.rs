@@ -38,15 +38,28 @@ impl RayShear {
 /// (p0, p1, p2), or `None`.
 #[inline]
 pub fn intersect(sh: &RayShear, p: &[[f32; 3]; 3], t_max: f32) -> Option<(f32, f32, f32)> {
-    let [kx, ky, kz] = sh.k;
-    let [sx, sy, sz] = sh.s;
-    let o = sh.o.to_array();
-    // Translate to the ray origin, permute, shear in x and y.
-    let mut v = [[0.0f32; 3]; 3];
-    for i in 0..3 {
-        let (x, y, z) = (p[i][kx] - o[kx], p[i][ky] - o[ky], p[i][kz] - o[kz]);
-        v[i] = [x + sx * z, y + sy * z, z];
+    // One specialisation per dominant axis, so the permutation is done with constant indices.
+    match sh.k[2] {
+        0 => intersect_k::<1, 2, 0>(sh, p, t_max),
+        1 => intersect_k::<2, 0, 1>(sh, p, t_max),
+        _ => intersect_k::<0, 1, 2>(sh, p, t_max),
     }
+}
+
+#[inline(always)]
+fn intersect_k<const KX: usize, const KY: usize, const KZ: usize>(
+    sh: &RayShear,
+    p: &[[f32; 3]; 3],
+    t_max: f32,
+) -> Option<(f32, f32, f32)> {
+    let [sx, sy, sz] = sh.s;
+    let o = [sh.o.x, sh.o.y, sh.o.z];
+    // Translate to the ray origin, permute, shear in x and y.
+    let tr = |q: &[f32; 3]| {
+        let z = q[KZ] - o[KZ];
+        [(q[KX] - o[KX]) + sx * z, (q[KY] - o[KY]) + sy * z, z]
+    };
+    let v = [tr(&p[0]), tr(&p[1]), tr(&p[2])];
     let mut e0 = v[1][0] * v[2][1] - v[1][1] * v[2][0];
     let mut e1 = v[2][0] * v[0][1] - v[2][1] * v[0][0];
     let mut e2 = v[0][0] * v[1][1] - v[0][1] * v[1][0];

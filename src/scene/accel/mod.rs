@@ -7,17 +7,19 @@
 
 use std::time::Duration;
 
-use glam::{Affine3A, DVec3, Vec3A};
+use glam::{Affine3A, DVec3, UVec2, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh;
-use obvhs::ray::RayHit;
 use obvhs::{Boundable, BvhBuildParams};
 use rayon::prelude::*;
 
 use crate::scene::ray::Ray;
 use crate::scene::shapes::quadric::{Quadric, transform_bounds};
 use crate::scene::shapes::triangle::{self, RayShear};
+
+mod traverse;
+use traverse::{TravRay, intersect_node};
 
 /// What a BVH leaf entry is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -68,6 +70,17 @@ pub struct Hit {
     pub b: [f32; 2],
     /// Object-space hit point of an analytic shape.
     pub quadric_p: DVec3,
+}
+
+/// The primitive that blocked the last occlusion query: a hint for the next query from the same point
+/// (rays leaving one point in nearby directions are often blocked by the same large triangle). Testing
+/// the hint first never changes an answer — any blocker proves occlusion — it only skips traversal.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct OccluderHint {
+    /// Top-level slot + 1 (0: no hint).
+    top: u32,
+    /// Slot inside the instance's object BVH, when the top-level entry is an instance.
+    inner: u32,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -202,71 +215,120 @@ impl Accel {
 
     /// Whether anything blocks `ray` for t in (0, ray.t_max).
     pub fn occluded(&self, ray: &Ray) -> bool {
-        self.any(&self.top, ray)
+        self.occluded_hinted(ray, &mut OccluderHint::default())
+    }
+
+    /// [`Accel::occluded`], first testing the primitive that blocked the previous query with this `hint`
+    /// and remembering the new blocker in it. The answer is the same as without the hint.
+    pub fn occluded_hinted(&self, ray: &Ray, hint: &mut OccluderHint) -> bool {
+        if false && hint.top != 0 && self.hint_blocks(ray, *hint) {
+            return true;
+        }
+        match self.any(&self.top, ray) {
+            Some((top, inner)) => {
+                *hint = OccluderHint { top: top + 1, inner };
+                true
+            }
+            None => false,
+        }
+    }
+
+    fn hint_blocks(&self, ray: &Ray, hint: OccluderHint) -> bool {
+        let Some(it) = self.top.items.get(hint.top as usize - 1) else { return false };
+        match it.r {
+            PrimRef::Instance(i) => {
+                let inst = &self.instances[i as usize];
+                let level = &self.objects[inst.object as usize];
+                let Some(inner) = level.items.get(hint.inner as usize) else { return false };
+                let local = Ray {
+                    o: inst.object_from_world.transform_point3a(ray.o),
+                    d: inst.object_from_world.transform_vector3a(ray.d),
+                    t_max: ray.t_max,
+                };
+                self.item_blocks(inner, &local, &RayShear::new(local.o, local.d))
+            }
+            _ => self.item_blocks(it, ray, &RayShear::new(ray.o, ray.d)),
+        }
+    }
+
+    #[inline]
+    fn item_blocks(&self, it: &Item, ray: &Ray, shear: &RayShear) -> bool {
+        match it.r {
+            PrimRef::Triangle { .. } => triangle::intersect(shear, &it.verts, ray.t_max).is_some(),
+            PrimRef::Quadric(q) => self.quadrics[q as usize].intersect(ray).is_some(),
+            PrimRef::Instance(_) => false,
+        }
     }
 
     fn nearest(&self, level: &Level, ray: &Ray) -> Option<Hit> {
         let bvh = level.bvh.as_ref()?;
         let shear = RayShear::new(ray.o, ray.d);
+        let mut tr = TravRay::new(ray.o, ray.d, ray.t_max);
         let mut best: Option<Hit> = None;
-        let mut rh = RayHit::none();
-        let oray = obvhs::ray::Ray::new(ray.o, ray.d, 0.0, ray.t_max);
-        bvh.ray_traverse(oray, &mut rh, |r, slot| {
-            let it = &level.items[slot];
-            let found = match it.r {
-                PrimRef::Triangle { .. } => triangle::intersect(&shear, &it.verts, r.tmax).map(|(t, b1, b2)| Hit {
-                    t,
-                    prim: it.r,
-                    instance: None,
-                    b: [b1, b2],
-                    quadric_p: DVec3::ZERO,
-                }),
-                PrimRef::Quadric(q) => self.quadrics[q as usize]
-                    .intersect(&Ray { t_max: r.tmax, ..*ray })
-                    .map(|h| Hit { t: h.t, prim: it.r, instance: None, b: [0.0; 2], quadric_p: h.p }),
-                PrimRef::Instance(i) => {
-                    let inst = &self.instances[i as usize];
-                    let local = Ray {
-                        o: inst.object_from_world.transform_point3a(ray.o),
-                        d: inst.object_from_world.transform_vector3a(ray.d),
-                        t_max: r.tmax,
-                    };
-                    self.nearest(&self.objects[inst.object as usize], &local).map(|h| Hit { instance: Some(i), ..h })
-                }
-            };
-            match found {
-                Some(h) if h.t < r.tmax => {
-                    best = Some(h);
-                    h.t
-                }
-                _ => f32::INFINITY,
+        let mut state = bvh.new_traversal(ray.d);
+        let mut node;
+        obvhs::traverse!(bvh, node, state, intersect_node(node, &tr, state.oct_inv4), {
+            let it = &level.items[state.primitive_id as usize];
+            let r = Ray { t_max: tr.t_max, ..*ray };
+            let found =
+                match it.r {
+                    PrimRef::Triangle { .. } => triangle::intersect(&shear, &it.verts, r.t_max)
+                        .map(|(t, b1, b2)| Hit { t, prim: it.r, instance: None, b: [b1, b2], quadric_p: DVec3::ZERO }),
+                    PrimRef::Quadric(q) => self.quadrics[q as usize].intersect(&r).map(|h| Hit {
+                        t: h.t,
+                        prim: it.r,
+                        instance: None,
+                        b: [0.0; 2],
+                        quadric_p: h.p,
+                    }),
+                    PrimRef::Instance(i) => {
+                        let inst = &self.instances[i as usize];
+                        let local = Ray {
+                            o: inst.object_from_world.transform_point3a(ray.o),
+                            d: inst.object_from_world.transform_vector3a(ray.d),
+                            t_max: r.t_max,
+                        };
+                        self.nearest(&self.objects[inst.object as usize], &local)
+                            .map(|h| Hit { instance: Some(i), ..h })
+                    }
+                };
+            if let Some(h) = found.filter(|h| h.t < tr.t_max) {
+                tr.t_max = h.t;
+                best = Some(h);
             }
         });
         best
     }
 
-    fn any(&self, level: &Level, ray: &Ray) -> bool {
-        let Some(bvh) = level.bvh.as_ref() else { return false };
+    /// The slot of a primitive of `level` blocking `ray` (and, for an instance, the slot inside it).
+    fn any(&self, level: &Level, ray: &Ray) -> Option<(u32, u32)> {
+        let bvh = level.bvh.as_ref()?;
         let shear = RayShear::new(ray.o, ray.d);
-        let oray = obvhs::ray::Ray::new(ray.o, ray.d, 0.0, ray.t_max);
-        let t_max = ray.t_max;
-        !bvh.ray_traverse_miss(oray, |_, slot| {
-            let it = &level.items[slot];
+        let tr = TravRay::new(ray.o, ray.d, ray.t_max);
+        let mut found = None;
+        let mut state = bvh.new_traversal(ray.d);
+        let mut node;
+        obvhs::traverse!(bvh, node, state, intersect_node(node, &tr, state.oct_inv4), {
+            let slot = state.primitive_id;
+            let it = &level.items[slot as usize];
             let blocked = match it.r {
-                PrimRef::Triangle { .. } => triangle::intersect(&shear, &it.verts, t_max).is_some(),
-                PrimRef::Quadric(q) => self.quadrics[q as usize].intersect(ray).is_some(),
                 PrimRef::Instance(i) => {
                     let inst = &self.instances[i as usize];
                     let local = Ray {
                         o: inst.object_from_world.transform_point3a(ray.o),
                         d: inst.object_from_world.transform_vector3a(ray.d),
-                        t_max,
+                        t_max: ray.t_max,
                     };
-                    self.any(&self.objects[inst.object as usize], &local)
+                    self.any(&self.objects[inst.object as usize], &local).map(|(inner, _)| inner)
                 }
+                _ => self.item_blocks(it, ray, &shear).then_some(u32::MAX),
             };
-            if blocked { 0.0 } else { f32::INFINITY }
-        })
+            if let Some(inner) = blocked {
+                found = Some((slot, inner));
+                break;
+            }
+        });
+        found
     }
 }
 
