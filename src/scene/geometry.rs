@@ -4,7 +4,7 @@
 
 use glam::Vec3A;
 
-use crate::scene::accel::{Accel, Hit, OccluderHint, PrimRef};
+use crate::scene::accel::{Accel, Hit, PrimOrigin, PrimRef};
 use crate::scene::mesh::TriangleMesh;
 use crate::scene::ray::{Ray, gamma, offset_ray_origin};
 use crate::scene::shapes::quadric::{QuadricHit, transform_normal, transform_point_with_error};
@@ -70,6 +70,8 @@ pub struct SurfaceInteraction {
     pub material: u32,
     /// Area light id, when the surface emits.
     pub area_light: Option<u32>,
+    /// The primitive hit (for skipping it in shadow queries from this point).
+    pub origin: PrimOrigin,
 }
 
 impl SurfaceInteraction {
@@ -93,10 +95,10 @@ impl Geometry {
         self.accel.occluded(ray)
     }
 
-    /// [`Geometry::occluded`] with a hint: the last blocker found from the same point is tested first.
+    /// [`Geometry::occluded`] for a ray leaving the surface `from` (which is then not tested).
     #[inline]
-    pub fn occluded_hinted(&self, ray: &Ray, hint: &mut OccluderHint) -> bool {
-        self.accel.occluded_hinted(ray, hint)
+    pub fn occluded_from(&self, ray: &Ray, from: PrimOrigin) -> bool {
+        self.accel.occluded_from(ray, from)
     }
 
     /// Total triangles stored (object definitions counted once).
@@ -126,6 +128,7 @@ impl Geometry {
                     uv: s.uv,
                     material: info.material,
                     area_light: info.area_light,
+                    origin: PrimOrigin { prim: hit.prim, instance: hit.instance },
                 }
             }
             PrimRef::Instance(_) => unreachable!("instances are resolved by the accelerator"),
@@ -141,6 +144,7 @@ impl Geometry {
             si.area_light = None;
         }
         si.t = hit.t;
+        si.origin = PrimOrigin { prim: hit.prim, instance: hit.instance };
         debug_assert!(ray.d.is_finite());
         si
     }
@@ -195,5 +199,6 @@ fn triangle_interaction(mesh: &TriangleMesh, tri: usize, hit: &Hit) -> SurfaceIn
         uv,
         material: mesh.material,
         area_light: mesh.area_light,
+        origin: PrimOrigin { prim: hit.prim, instance: hit.instance },
     }
 }

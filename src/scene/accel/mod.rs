@@ -72,21 +72,27 @@ pub struct Hit {
     pub quadric_p: DVec3,
 }
 
-/// The primitive that blocked the last occlusion query: a hint for the next query from the same point
-/// (rays leaving one point in nearby directions are often blocked by the same large triangle). Testing
-/// the hint first never changes an answer — any blocker proves occlusion — it only skips traversal.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct OccluderHint {
-    /// Top-level slot + 1 (0: no hint).
-    top: u32,
-    /// Slot inside the instance's object BVH, when the top-level entry is an instance.
-    inner: u32,
+/// The surface a ray leaves from. A planar triangle cannot block a ray that leaves its own surface
+/// (pbrt-v3's conservative test rejects it every time), so occlusion queries skip it instead of testing it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PrimOrigin {
+    /// The primitive (triangle indices refer to the instance's object when `instance` is set).
+    pub prim: PrimRef,
+    /// The instance, if any.
+    pub instance: Option<u32>,
 }
 
 #[derive(Clone, Copy, Debug)]
 struct Item {
     verts: [[f32; 3]; 3],
     r: PrimRef,
+}
+
+/// What an occlusion query leaves out: a top-level triangle, or a triangle inside one instance.
+#[derive(Clone, Copy, Debug, Default)]
+struct Skip {
+    top: Option<PrimRef>,
+    inner: Option<(u32, PrimRef)>,
 }
 
 struct Boxed(Aabb);
@@ -119,6 +125,11 @@ impl Level {
             .map(|p| match p.r {
                 PrimRef::Triangle { .. } => {
                     let [a, b, c] = p.verts.map(Vec3A::from);
+                    // A triangle of zero area can never be hit (the watertight test needs det ≠ 0);
+                    // leaving it out of the tree changes no answer and saves every test of it.
+                    if (b - a).cross(c - a) == Vec3A::ZERO {
+                        return None;
+                    }
                     Some((a.min(b).min(c), a.max(b).max(c)))
                 }
                 PrimRef::Quadric(q) => Some(quadrics[q as usize].world_bounds()),
@@ -215,40 +226,20 @@ impl Accel {
 
     /// Whether anything blocks `ray` for t in (0, ray.t_max).
     pub fn occluded(&self, ray: &Ray) -> bool {
-        self.occluded_hinted(ray, &mut OccluderHint::default())
+        self.any(&self.top, ray, None).is_some()
     }
 
-    /// [`Accel::occluded`], first testing the primitive that blocked the previous query with this `hint`
-    /// and remembering the new blocker in it. The answer is the same as without the hint.
-    pub fn occluded_hinted(&self, ray: &Ray, hint: &mut OccluderHint) -> bool {
-        if false && hint.top != 0 && self.hint_blocks(ray, *hint) {
-            return true;
-        }
-        match self.any(&self.top, ray) {
-            Some((top, inner)) => {
-                *hint = OccluderHint { top: top + 1, inner };
-                true
+    /// [`Accel::occluded`] for a ray leaving the surface `from`: that triangle is not tested (it cannot
+    /// block the ray). The answer is the same as [`Accel::occluded`]'s.
+    pub fn occluded_from(&self, ray: &Ray, from: PrimOrigin) -> bool {
+        let skip = match from {
+            PrimOrigin { prim: p @ PrimRef::Triangle { .. }, instance: None } => Skip { top: Some(p), inner: None },
+            PrimOrigin { prim: p @ PrimRef::Triangle { .. }, instance: Some(i) } => {
+                Skip { top: None, inner: Some((i, p)) }
             }
-            None => false,
-        }
-    }
-
-    fn hint_blocks(&self, ray: &Ray, hint: OccluderHint) -> bool {
-        let Some(it) = self.top.items.get(hint.top as usize - 1) else { return false };
-        match it.r {
-            PrimRef::Instance(i) => {
-                let inst = &self.instances[i as usize];
-                let level = &self.objects[inst.object as usize];
-                let Some(inner) = level.items.get(hint.inner as usize) else { return false };
-                let local = Ray {
-                    o: inst.object_from_world.transform_point3a(ray.o),
-                    d: inst.object_from_world.transform_vector3a(ray.d),
-                    t_max: ray.t_max,
-                };
-                self.item_blocks(inner, &local, &RayShear::new(local.o, local.d))
-            }
-            _ => self.item_blocks(it, ray, &RayShear::new(ray.o, ray.d)),
-        }
+            _ => Skip::default(),
+        };
+        self.any(&self.top, ray, Some(&skip)).is_some()
     }
 
     #[inline]
@@ -301,33 +292,43 @@ impl Accel {
     }
 
     /// The slot of a primitive of `level` blocking `ray` (and, for an instance, the slot inside it).
-    fn any(&self, level: &Level, ray: &Ray) -> Option<(u32, u32)> {
+    fn any(&self, level: &Level, ray: &Ray, skip: Option<&Skip>) -> Option<(u32, u32)> {
         let bvh = level.bvh.as_ref()?;
         let shear = RayShear::new(ray.o, ray.d);
         let tr = TravRay::new(ray.o, ray.d, ray.t_max);
         let mut found = None;
         let mut state = bvh.new_traversal(ray.d);
         let mut node;
-        obvhs::traverse!(bvh, node, state, intersect_node(node, &tr, state.oct_inv4), {
-            let slot = state.primitive_id;
-            let it = &level.items[slot as usize];
-            let blocked = match it.r {
-                PrimRef::Instance(i) => {
-                    let inst = &self.instances[i as usize];
-                    let local = Ray {
-                        o: inst.object_from_world.transform_point3a(ray.o),
-                        d: inst.object_from_world.transform_vector3a(ray.d),
-                        t_max: ray.t_max,
-                    };
-                    self.any(&self.objects[inst.object as usize], &local).map(|(inner, _)| inner)
+        'search: {
+            obvhs::traverse!(bvh, node, state, intersect_node(node, &tr, state.oct_inv4), {
+                let slot = state.primitive_id;
+                let it = &level.items[slot as usize];
+                if skip.is_some_and(|k| k.top == Some(it.r)) {
+                    continue;
                 }
-                _ => self.item_blocks(it, ray, &shear).then_some(u32::MAX),
-            };
-            if let Some(inner) = blocked {
-                found = Some((slot, inner));
-                break;
-            }
-        });
+                let blocked = match it.r {
+                    PrimRef::Instance(i) => {
+                        let inst = &self.instances[i as usize];
+                        let local = Ray {
+                            o: inst.object_from_world.transform_point3a(ray.o),
+                            d: inst.object_from_world.transform_vector3a(ray.d),
+                            t_max: ray.t_max,
+                        };
+                        let inner_skip = skip
+                            .and_then(|k| k.inner)
+                            .filter(|(j, _)| *j == i)
+                            .map(|(_, p)| Skip { top: Some(p), inner: None });
+                        self.any(&self.objects[inst.object as usize], &local, inner_skip.as_ref())
+                            .map(|(inner, _)| inner)
+                    }
+                    _ => self.item_blocks(it, ray, &shear).then_some(u32::MAX),
+                };
+                if let Some(inner) = blocked {
+                    found = Some((slot, inner));
+                    break 'search;
+                }
+            });
+        }
         found
     }
 }

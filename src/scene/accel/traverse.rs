@@ -17,6 +17,7 @@ pub(super) struct TravRay {
     neg: [bool; 3],
     /// Current far limit of the search (shrinks as closer hits are found).
     pub t_max: f32,
+    wide: bool,
 }
 
 /// Smallest |direction component| used for the reciprocal (an exact 0 would give ∞·0 = NaN in the slab test).
@@ -28,62 +29,67 @@ impl TravRay {
     pub fn new(o: Vec3A, d: Vec3A, t_max: f32) -> Self {
         let safe = |v: f32| if v.abs() < TINY { TINY.copysign(v) } else { v };
         let inv_d = Vec3A::new(1.0 / safe(d.x), 1.0 / safe(d.y), 1.0 / safe(d.z));
-        TravRay { o, inv_d, neg: [d.x < 0.0, d.y < 0.0, d.z < 0.0], t_max }
+        TravRay { o, inv_d, neg: [d.x < 0.0, d.y < 0.0, d.z < 0.0], t_max, wide: has_avx2() }
     }
 }
 
 /// The obvhs child hit mask of `node` for `r` (bit layout as `CwBvhNode::intersect_ray`).
 #[inline(always)]
 pub(super) fn intersect_node(node: &CwBvhNode, r: &TravRay, oct_inv4: u32) -> u32 {
-    let adj_inv = node.compute_extent() * r.inv_d;
-    let adj_o = (Vec3A::from(node.p) - r.o) * r.inv_d;
-    let t_far = r.t_max * (1.0 + 2.0 * gamma(3));
+    #[cfg(target_arch = "x86_64")]
+    let mut mask = if r.wide {
+        // SAFETY: `wide` is set only when the CPU reports AVX2.
+        unsafe { child_mask_avx2(node, r) }
+    } else {
+        child_mask(node, r)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let mut mask = child_mask(node, r);
     let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
-    let (x0, x1) = lo_hi(&node.child_min_x, &node.child_max_x, r.neg[0]);
-    let (y0, y1) = lo_hi(&node.child_min_y, &node.child_max_y, r.neg[1]);
-    let (z0, z1) = lo_hi(&node.child_min_z, &node.child_max_z, r.neg[2]);
-    let mask =
-        slab_mask([x0, x1, y0, y1, z0, z1], [adj_inv.x, adj_inv.y, adj_inv.z], [adj_o.x, adj_o.y, adj_o.z], t_far);
     let mut hit_mask = 0u32;
-    for child in 0..8 {
-        if mask & (1 << child) != 0 {
-            let bits = ((child_bits8 >> (child * 8)) as u32) & 0xff;
-            let index = ((bit_index8 >> (child * 8)) as u32) & 0xff;
-            hit_mask |= bits << index;
-        }
+    while mask != 0 {
+        let child = mask.trailing_zeros();
+        mask &= mask - 1;
+        let bits = ((child_bits8 >> (child * 8)) as u32) & 0xff;
+        let index = ((bit_index8 >> (child * 8)) as u32) & 0xff;
+        hit_mask |= bits << index;
     }
     hit_mask
 }
 
+/// The slab-test inputs of a node for a ray: per axis the quantised near/far planes (swapped for negative
+/// directions), and the scale and offset that turn a quantised plane into a ray distance.
 #[inline(always)]
-fn lo_hi<'a>(lo: &'a [u8; 8], hi: &'a [u8; 8], neg: bool) -> (&'a [u8; 8], &'a [u8; 8]) {
-    if neg { (hi, lo) } else { (lo, hi) }
+fn setup<'a>(node: &'a CwBvhNode, r: &TravRay) -> ([&'a [u8; 8]; 6], Vec3A, Vec3A, f32) {
+    let adj_inv = node.compute_extent() * r.inv_d;
+    let adj_o = (Vec3A::from(node.p) - r.o) * r.inv_d;
+    let pick = |lo: &'a [u8; 8], hi: &'a [u8; 8], neg: bool| if neg { [hi, lo] } else { [lo, hi] };
+    let [x0, x1] = pick(&node.child_min_x, &node.child_max_x, r.neg[0]);
+    let [y0, y1] = pick(&node.child_min_y, &node.child_max_y, r.neg[1]);
+    let [z0, z1] = pick(&node.child_min_z, &node.child_max_z, r.neg[2]);
+    ([x0, x1, y0, y1, z0, z1], adj_inv, adj_o, r.t_max * (1.0 + 2.0 * gamma(3)))
 }
 
-/// Bit c set when child c's quantised box overlaps the ray segment [0, t_far]. `q` holds, per axis, the
-/// quantised near and far planes (already swapped for negative directions).
+/// Bit c set when child c's quantised box overlaps the ray segment [0, t_max·(1 + 2γ₃)] (4 at a time).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn slab_mask(q: [&[u8; 8]; 6], inv: [f32; 3], org: [f32; 3], t_far: f32) -> u32 {
+fn child_mask(node: &CwBvhNode, r: &TravRay) -> u32 {
     use std::arch::x86_64::*;
     #[inline(always)]
     fn load(v: &[u8; 8], half: usize) -> __m128 {
-        // SAFETY: SSE2 is part of the x86_64 baseline; the loads stay inside the 8-byte array.
+        let w = u32::from_le_bytes([v[4 * half], v[4 * half + 1], v[4 * half + 2], v[4 * half + 3]]);
+        // SAFETY: SSE2 is part of the x86_64 baseline.
         unsafe {
-            let w = u32::from_le_bytes([v[4 * half], v[4 * half + 1], v[4 * half + 2], v[4 * half + 3]]);
-            _mm_cvtepi32_ps(_mm_unpacklo_epi16(
-                _mm_unpacklo_epi8(_mm_cvtsi32_si128(w as i32), _mm_setzero_si128()),
-                _mm_setzero_si128(),
-            ))
+            let z = _mm_setzero_si128();
+            _mm_cvtepi32_ps(_mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(w as i32), z), z))
         }
     }
+    let (q, inv, org, t_far) = setup(node, r);
     let mut mask = 0u32;
     // SAFETY: SSE2 arithmetic only.
     unsafe {
-        let (ix, iy, iz) = (_mm_set1_ps(inv[0]), _mm_set1_ps(inv[1]), _mm_set1_ps(inv[2]));
-        let (ox, oy, oz) = (_mm_set1_ps(org[0]), _mm_set1_ps(org[1]), _mm_set1_ps(org[2]));
-        let zero = _mm_setzero_ps();
-        let far = _mm_set1_ps(t_far);
+        let (ix, iy, iz) = (_mm_set1_ps(inv.x), _mm_set1_ps(inv.y), _mm_set1_ps(inv.z));
+        let (ox, oy, oz) = (_mm_set1_ps(org.x), _mm_set1_ps(org.y), _mm_set1_ps(org.z));
         for half in 0..2 {
             let t0x = _mm_add_ps(_mm_mul_ps(load(q[0], half), ix), ox);
             let t1x = _mm_add_ps(_mm_mul_ps(load(q[1], half), ix), ox);
@@ -91,18 +97,59 @@ fn slab_mask(q: [&[u8; 8]; 6], inv: [f32; 3], org: [f32; 3], t_far: f32) -> u32 
             let t1y = _mm_add_ps(_mm_mul_ps(load(q[3], half), iy), oy);
             let t0z = _mm_add_ps(_mm_mul_ps(load(q[4], half), iz), oz);
             let t1z = _mm_add_ps(_mm_mul_ps(load(q[5], half), iz), oz);
-            let tmin = _mm_max_ps(_mm_max_ps(t0x, t0y), _mm_max_ps(t0z, zero));
-            let tmax = _mm_min_ps(_mm_min_ps(t1x, t1y), _mm_min_ps(t1z, far));
+            let tmin = _mm_max_ps(_mm_max_ps(t0x, t0y), _mm_max_ps(t0z, _mm_setzero_ps()));
+            let tmax = _mm_min_ps(_mm_min_ps(t1x, t1y), _mm_min_ps(t1z, _mm_set1_ps(t_far)));
             mask |= (_mm_movemask_ps(_mm_cmple_ps(tmin, tmax)) as u32) << (4 * half);
         }
     }
     mask
 }
 
+/// [`child_mask`] for all 8 children at once. The same operations in the same order (multiply, then add;
+/// no fused multiply-add), so it visits exactly the nodes the SSE2 version visits and images do not depend
+/// on the CPU.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn child_mask_avx2(node: &CwBvhNode, r: &TravRay) -> u32 {
+    use std::arch::x86_64::*;
+    #[inline(always)]
+    fn load(v: &[u8; 8]) -> __m256 {
+        // SAFETY: reads exactly the 8 bytes of `v`; only called where AVX2 is enabled.
+        unsafe { _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(v.as_ptr() as *const __m128i))) }
+    }
+    let (q, inv, org, t_far) = setup(node, r);
+    let (ix, iy, iz) = (_mm256_set1_ps(inv.x), _mm256_set1_ps(inv.y), _mm256_set1_ps(inv.z));
+    let (ox, oy, oz) = (_mm256_set1_ps(org.x), _mm256_set1_ps(org.y), _mm256_set1_ps(org.z));
+    let t0x = _mm256_add_ps(_mm256_mul_ps(load(q[0]), ix), ox);
+    let t1x = _mm256_add_ps(_mm256_mul_ps(load(q[1]), ix), ox);
+    let t0y = _mm256_add_ps(_mm256_mul_ps(load(q[2]), iy), oy);
+    let t1y = _mm256_add_ps(_mm256_mul_ps(load(q[3]), iy), oy);
+    let t0z = _mm256_add_ps(_mm256_mul_ps(load(q[4]), iz), oz);
+    let t1z = _mm256_add_ps(_mm256_mul_ps(load(q[5]), iz), oz);
+    let tmin = _mm256_max_ps(_mm256_max_ps(t0x, t0y), _mm256_max_ps(t0z, _mm256_setzero_ps()));
+    let tmax = _mm256_min_ps(_mm256_min_ps(t1x, t1y), _mm256_min_ps(t1z, _mm256_set1_ps(t_far)));
+    _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax)) as u32
+}
+
+/// Whether the 8-wide node test can run (the standard library caches the CPU query).
+#[inline]
+fn has_avx2() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
 /// Portable version of the slab test.
 #[cfg(not(target_arch = "x86_64"))]
 #[inline(always)]
-fn slab_mask(q: [&[u8; 8]; 6], inv: [f32; 3], org: [f32; 3], t_far: f32) -> u32 {
+fn child_mask(node: &CwBvhNode, r: &TravRay) -> u32 {
+    let (q, inv, org, t_far) = setup(node, r);
+    let (inv, org) = (inv.to_array(), org.to_array());
     let mut mask = 0u32;
     for c in 0..8 {
         let t = |k: usize, axis: usize| q[k][c] as f32 * inv[axis] + org[axis];
@@ -150,5 +197,37 @@ mod tests {
             }
         }
         assert_eq!(differ, 0);
+    }
+
+    #[test]
+    fn wide_and_narrow_node_tests_agree_everywhere() {
+        let mut rng = Rng::new(11);
+        let mut v = || Vec3A::new(rng.uniform(), rng.uniform(), rng.uniform()) * 10.0;
+        let tris: Vec<Triangle> = (0..300)
+            .map(|_| {
+                let a = v();
+                Triangle { v0: a, v1: a + v() * 0.2, v2: a + v() * 0.2 }
+            })
+            .collect();
+        let bvh = build_cwbvh_from_tris(&tris, BvhBuildParams::medium_build(), &mut Default::default());
+        let mut rng = Rng::new(12);
+        for i in 0..5000 {
+            // Origins inside the scene, so many boxes contain them.
+            let o = Vec3A::new(rng.uniform(), rng.uniform(), rng.uniform()) * 10.0;
+            let d = Vec3A::new(
+                rng.uniform() - 0.5,
+                rng.uniform() - 0.5,
+                if i % 7 == 0 { 0.0 } else { rng.uniform() - 0.5 },
+            );
+            let t_max = if i % 3 == 0 { f32::INFINITY } else { rng.uniform() * 5.0 };
+            let mut tr = TravRay::new(o, d, t_max);
+            let node = &bvh.nodes[i % bvh.nodes.len()];
+            tr.wide = false;
+            let narrow = child_mask(node, &tr);
+            if has_avx2() {
+                // SAFETY: checked just above.
+                assert_eq!(narrow, unsafe { child_mask_avx2(node, &tr) }, "ray {i}");
+            }
+        }
     }
 }
