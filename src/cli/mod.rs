@@ -1,6 +1,7 @@
 //! The subcommands of the `cachert` binary, as library functions returning the text to print, so tests
 //! can call them; `main.rs` only parses flags, prints and maps errors to exit status 2.
 
+pub mod bench;
 pub mod compare;
 pub mod info;
 pub mod render;
@@ -23,6 +24,8 @@ pub enum Command {
     Info(info::InfoArgs),
     /// Compare an image with a reference (RMSE, relMSE, HDR-FLIP, LDR-FLIP).
     Compare(compare::CompareArgs),
+    /// Time the pbrt-v3 reference scenes against pbrt-v3's own CPU times.
+    Bench(bench::BenchArgs),
 }
 
 /// Runs a parsed command line; returns what to print on stdout.
@@ -31,5 +34,6 @@ pub fn run(cli: &Cli) -> crate::Result<String> {
         Command::Render(a) => render::run(a),
         Command::Info(a) => info::run(a),
         Command::Compare(a) => compare::run(a),
+        Command::Bench(a) => bench::run(a),
     }
 }
