@@ -8,6 +8,7 @@ use glam::Vec3A;
 use rayon::prelude::*;
 
 use crate::scene::Scene;
+use crate::scene::accel::PrimOrigin;
 
 /// Index of a pixel in a G-buffer: `y * width + x`.
 pub type PixelId = u32;
@@ -31,6 +32,36 @@ pub struct ShadingPoint {
     pub uv: [f32; 2],
     /// Material id.
     pub material: u32,
+    /// The primitive seen (shadow rays from here skip it; see `scene::accel::PrimOrigin`).
+    pub origin: Option<PrimOrigin>,
+}
+
+/// The shading point seen through film position `p_film` (raster coordinates of the full image), passing
+/// through surfaces without a material as the integrators do; `None` when the ray leaves the scene.
+pub fn shading_point(scene: &Scene, p_film: [f32; 2]) -> Option<ShadingPoint> {
+    let cam = scene.camera.position();
+    let mut ray = scene.camera.generate_ray(p_film, [0.5, 0.5]);
+    for _ in 0..1024 {
+        let si = scene.geometry.intersect(&ray)?;
+        if scene.is_null_material(si.material) {
+            ray = si.spawn_ray(ray.d);
+            continue;
+        }
+        let wo = -ray.d.normalize();
+        let face = |n: Vec3A| if n.dot(wo) < 0.0 { -n } else { n };
+        return Some(ShadingPoint {
+            p: si.p,
+            p_error: si.p_error,
+            n: face(si.ns),
+            ng: face(si.ng),
+            wo,
+            depth: (si.p - cam).length(),
+            uv: si.uv,
+            material: si.material,
+            origin: Some(si.origin),
+        });
+    }
+    None
 }
 
 /// One shading point per pixel of the (cropped) image.
@@ -67,32 +98,11 @@ impl GBuffer {
     pub fn from_scene(scene: &Scene) -> Self {
         let b = scene.film.cropped_bounds();
         let [w, h] = b.size();
-        let cam = scene.camera.position();
         let points = (0..w * h)
             .into_par_iter()
             .map(|i| {
                 let p_film = [(b.min[0] + (i % w) as i32) as f32 + 0.5, (b.min[1] + (i / w) as i32) as f32 + 0.5];
-                let mut ray = scene.camera.generate_ray(p_film, [0.5, 0.5]);
-                for _ in 0..1024 {
-                    let si = scene.geometry.intersect(&ray)?;
-                    if scene.is_null_material(si.material) {
-                        ray = si.spawn_ray(ray.d);
-                        continue;
-                    }
-                    let wo = -ray.d.normalize();
-                    let face = |n: Vec3A| if n.dot(wo) < 0.0 { -n } else { n };
-                    return Some(ShadingPoint {
-                        p: si.p,
-                        p_error: si.p_error,
-                        n: face(si.ns),
-                        ng: face(si.ng),
-                        wo,
-                        depth: (si.p - cam).length(),
-                        uv: si.uv,
-                        material: si.material,
-                    });
-                }
-                None
+                shading_point(scene, p_film)
             })
             .collect();
         Self::finish(w, h, points, scene.diagonal())

@@ -15,6 +15,7 @@
 //! panics.
 #![deny(missing_docs)]
 
+pub mod application;
 pub mod cache;
 pub mod cli;
 pub mod error;

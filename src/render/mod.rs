@@ -19,26 +19,7 @@ use crate::scene::ray::Ray;
 
 use samples::PixelSamples;
 
-/// Rays traced, by kind.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct RayCounters {
-    /// Nearest-hit rays (camera rays and their continuations).
-    pub camera: u64,
-    /// Any-hit (shadow/occlusion) rays.
-    pub shadow: u64,
-}
-
-impl RayCounters {
-    /// All rays.
-    pub fn total(&self) -> u64 {
-        self.camera + self.shadow
-    }
-
-    fn add(&mut self, o: &RayCounters) {
-        self.camera += o.camera;
-        self.shadow += o.shadow;
-    }
-}
+pub use crate::scene::ray::RayCounters;
 
 /// An integrator that estimates the radiance along one camera ray.
 pub trait PixelIntegrator: Sync {

@@ -24,6 +24,22 @@ impl Frame {
         Frame { s, t, n }
     }
 
+    /// The frame of ALGORITHMS.md §3.3 for gathering caches: tangent = the fixed generic axis
+    /// a = (1,2,3)/√14 made orthogonal to n (fallback a' = (3,−1,2)/√14 when that is nearly zero), so that
+    /// nearby caches with similar normals get similar frames and their gathering samples correspond index by
+    /// index.
+    pub fn generic(n: Vec3A) -> Self {
+        let inv = 1.0 / 14f32.sqrt();
+        let a = Vec3A::new(1.0, 2.0, 3.0) * inv;
+        let mut t = a - n * a.dot(n);
+        if t.length() < 1e-3 {
+            let a2 = Vec3A::new(3.0, -1.0, 2.0) * inv;
+            t = a2 - n * a2.dot(n);
+        }
+        let s = t.normalize();
+        Frame { s, t: n.cross(s), n }
+    }
+
     /// Local → world.
     #[inline]
     pub fn to_world(&self, v: Vec3A) -> Vec3A {
@@ -40,6 +56,18 @@ impl Frame {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn generic_frames_are_orthonormal_and_vary_smoothly() {
+        let n1 = Vec3A::new(0.1, 0.2, 0.97).normalize();
+        let n2 = (n1 + Vec3A::new(0.017, 0.0, 0.0)).normalize(); // about 1° apart
+        let (f1, f2) = (Frame::generic(n1), Frame::generic(n2));
+        assert!(f1.s.dot(f1.t).abs() < 1e-5 && f1.s.dot(f1.n).abs() < 1e-5 && (f1.s.cross(f1.t) - f1.n).length() < 1e-5);
+        assert!(f1.s.dot(f2.s) > (3f32.to_radians()).cos(), "tangents of normals 1° apart differ by more than 3°");
+        let a = Vec3A::new(1.0, 2.0, 3.0).normalize();
+        let f = Frame::generic(a);
+        assert!((f.s.length() - 1.0).abs() < 1e-5, "fallback axis used at n = a");
+    }
 
     #[test]
     fn frames_are_orthonormal_and_right_handed() {

@@ -56,6 +56,18 @@ pub fn uniform_hemisphere(u: [f32; 2]) -> Vec3A {
     Vec3A::new(r * phi.cos(), r * phi.sin(), z)
 }
 
+/// Clarberg's equal-area map from [0,1)² to the hemisphere around +z (ALGORITHMS.md §3.2): the concentric
+/// map to the disk, then the Lambert azimuthal equal-area lift z = 1 − r², (x, y) = r·sqrt(2 − r²)·(cos φ,
+/// sin φ). Equal areas of the square map to equal solid angles, so an n×n grid of cells gives n² directions
+/// of 2π/n² sr each.
+#[inline]
+pub fn equal_area_hemisphere(u: [f32; 2]) -> Vec3A {
+    let [dx, dy] = concentric_disk(u);
+    let r2 = dx * dx + dy * dy;
+    let s = (2.0 - r2).max(0.0).sqrt();
+    Vec3A::new(dx * s, dy * s, 1.0 - r2)
+}
+
 /// The density of [`uniform_hemisphere`].
 pub const UNIFORM_HEMISPHERE_PDF: f32 = 1.0 / (2.0 * PI);
 
@@ -98,6 +110,36 @@ mod tests {
             let x = -FRAC_PI_4 + i as f32 / 1000.0 * 2.0 * FRAC_PI_4;
             let (s, c) = sin_cos_quarter(x);
             assert!((s - x.sin()).abs() < 2e-7 && (c - x.cos()).abs() < 2e-7, "{x}");
+        }
+    }
+
+    #[test]
+    fn equal_area_cells_have_equal_solid_angles_and_integrate_cosine() {
+        // Σ_k cos θ_k · 2π/n² ≈ π (ALGORITHMS.md §12) over the 32×32 cell centres.
+        let n = 32;
+        let sum: f64 = grid(n).map(|u| equal_area_hemisphere(u).z as f64).sum::<f64>() * 2.0 * std::f64::consts::PI / (n * n) as f64;
+        assert!((sum - std::f64::consts::PI).abs() < 0.01 * std::f64::consts::PI, "{sum}");
+        for u in grid(n) {
+            let w = equal_area_hemisphere(u);
+            assert!((w.length() - 1.0).abs() < 1e-5 && w.z >= 0.0);
+        }
+        // Equal area ⇔ uniform square samples give uniform directions; on the hemisphere that means
+        // z = cos θ is uniform on [0, 1] and so is φ/2π. Histogram a fine grid of square points.
+        let m = 512;
+        let mut hz = [0u32; 10];
+        let mut hphi = [0u32; 8];
+        for u in grid(m) {
+            let w = equal_area_hemisphere(u);
+            hz[((w.z * 10.0) as usize).min(9)] += 1;
+            let phi = w.y.atan2(w.x).rem_euclid(2.0 * PI);
+            hphi[((phi / (2.0 * PI) * 8.0) as usize).min(7)] += 1;
+        }
+        let total = (m * m) as f64;
+        for c in hz {
+            assert!((c as f64 / total - 0.1).abs() < 0.002, "{hz:?}");
+        }
+        for c in hphi {
+            assert!((c as f64 / total - 0.125).abs() < 0.002, "{hphi:?}");
         }
     }
 

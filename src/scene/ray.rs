@@ -48,6 +48,28 @@ pub fn offset_ray_origin(p: Vec3A, p_error: Vec3A, n: Vec3A, w: Vec3A) -> Vec3A 
     Vec3A::from(out)
 }
 
+/// Rays traced, by kind.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayCounters {
+    /// Nearest-hit rays (camera rays and their continuations).
+    pub camera: u64,
+    /// Any-hit (shadow/occlusion) rays.
+    pub shadow: u64,
+}
+
+impl RayCounters {
+    /// All rays.
+    pub fn total(&self) -> u64 {
+        self.camera + self.shadow
+    }
+
+    /// Adds another count.
+    pub fn add(&mut self, o: &RayCounters) {
+        self.camera += o.camera;
+        self.shadow += o.shadow;
+    }
+}
+
 /// `γ(n)` of pbrt-v3: the bound on the relative error of `n` floating-point operations.
 #[inline]
 pub const fn gamma(n: i32) -> f32 {
