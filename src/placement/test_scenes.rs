@@ -6,7 +6,7 @@
 
 use glam::Vec3A;
 
-use super::{CacheId, CacheOracle, InitialPlacement, PlacementParams, Stage1};
+use super::{AdaptivePlacement, CacheId, CacheOracle, InitialPlacement, PlacementParams, Stage1};
 use crate::gbuffer::{GBuffer, PixelId, ShadingPoint};
 use crate::sampling::{Rng, hash3};
 
@@ -294,5 +294,53 @@ impl CacheOracle for MaskOracle<'_> {
             self.sites.push(s);
             self.masks.push(mask_at(p));
         }
+    }
+}
+
+/// Fraction of `sites` within 0.3 world units of the hidden step, over the same fraction of usable pixels
+/// (1 = no preference, as uniform sampling would give).
+pub fn step_preference(g: &GBuffer, sites: &[PixelId]) -> f64 {
+    let near = |id: PixelId| g.get(id).is_some_and(|sp| (sp.p.x - STEP_X).abs() < 0.3);
+    let all: Vec<PixelId> = (0..g.points.len() as PixelId).filter(|&id| super::points::is_usable(g, id)).collect();
+    let base = all.iter().filter(|&&id| near(id)).count() as f64 / all.len() as f64;
+    let got = sites.iter().filter(|&&id| near(id)).count() as f64 / sites.len().max(1) as f64;
+    got / base
+}
+
+/// The second-stage contract: exactly N2 new distinct usable pixels that are not caches, evaluated through
+/// the oracle; same seed ⇒ same result on 1 and 2 threads, different seed ⇒ different; a strong preference
+/// for the hidden step (when `seeks_step`, on the flat scene); budgets 0 and above the free pixel count.
+pub fn check_adaptive(strategy: &dyn AdaptivePlacement, first: &dyn InitialPlacement, seeks_step: bool) {
+    let params = PlacementParams::default();
+    for (name, g) in
+        [("sphere", sphere_on_plane(160, 120)), ("staircase", staircase(160, 120)), ("flat", flat(160, 120))]
+    {
+        let s1 = first.place(&g, 1000, &params, SEED).unwrap();
+        let run = |threads, budget, seed| {
+            in_pool(threads, || {
+                let mut o = MaskOracle::new(&g, &s1.sites);
+                let info = strategy.place(&g, &s1, &mut o, budget, &params, seed).unwrap();
+                (o.sites, info)
+            })
+        };
+        let (sites, info) = run(1, 300, SEED);
+        assert_eq!(info.added, 300, "{name}");
+        assert_eq!(sites.len(), 1300, "{name}");
+        check_sites(&g, &sites);
+        assert_eq!(sites[..1000], s1.sites[..], "{name}: stage-1 caches changed");
+        assert_eq!(run(2, 300, SEED), (sites.clone(), info.clone()), "{name}: thread count changed the result");
+        assert_ne!(run(1, 300, SEED + 1).0, sites, "{name}: the seed changed nothing");
+        if name == "flat" && seeks_step {
+            let pref = step_preference(&g, &sites[1000..]);
+            assert!(pref > 2.0, "{name}: preference for the step only {pref}");
+        }
+        let (none, info0) = run(1, 0, SEED);
+        assert_eq!((none.len(), info0.added), (1000, 0));
+        let free = usable_count(&g) - 1000;
+        let (all, info_all) = run(1, free + 10, SEED);
+        assert_eq!(all.len(), usable_count(&g), "{name}");
+        assert_eq!(info_all.added, free);
+        assert!(!info_all.notes.is_empty());
+        check_sites(&g, &all);
     }
 }
