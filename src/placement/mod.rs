@@ -6,6 +6,7 @@
 //! Strategy names (what users type and reports print) are resolved by [`registry::strategy`].
 //! Depends on `gbuffer`, `cache` (the §5 neighbour selection) and `sampling`; never on `render` or `scene`.
 
+pub mod adaptive;
 pub mod discontinuity;
 pub mod image_uniform;
 pub mod registry;
@@ -22,6 +23,7 @@ mod split;
 #[cfg(test)]
 mod test_scenes;
 
+pub use adaptive::AdaptiveSampling;
 pub use discontinuity::Discontinuity;
 pub use image_uniform::ImageUniform;
 pub use spatial_directional::SpatialDirectional;
