@@ -3,7 +3,13 @@
 //! θ_max → the M smallest Dist = ‖p_c − p_s‖ + λ·sqrt(1 − n_c·n_s), with a fallback to all N when the
 //! normal filter leaves none; inverse-Dist weights for interpolation.
 //!
-//! Depends on nothing but glam and kiddo; used by placement (DGS, AS) and by the render driver alike.
+//! Depends on nothing but glam and kiddo; used by placement (DGS, AS) and by the render driver alike. It
+//! must not depend on the record type of any application, on `scene` or on `render`.
+
+use std::num::NonZeroUsize;
+
+use glam::Vec3A;
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
 /// Parameters of the §5 selection.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -19,5 +25,412 @@ pub struct LookupParams {
 impl Default for LookupParams {
     fn default() -> Self {
         LookupParams { candidates: 20, theta_max_deg: 30.0, keep: 6 }
+    }
+}
+
+/// One cache chosen for a shading point: its id (index into the points given to [`CacheIndex::new`]) and
+/// its Eq. 5 distance Dist = ‖p_c − p_s‖ + λ·sqrt(max(0, 1 − n_c·n_s)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Neighbour {
+    /// The cache id.
+    pub id: u32,
+    /// Eq. 5 distance to the shading point.
+    pub dist: f32,
+}
+
+/// Relative size of the exact-hit radius: a shading point closer than `EXACT_HIT · L` (Eq. 5 distance) to a
+/// cache takes that cache's value alone (ALGORITHMS.md §5 step 6).
+pub const EXACT_HIT: f32 = 1e-7;
+
+/// A kd-tree over cache positions with the §5 selection and Eq. 5 weights.
+///
+/// Caches whose position or normal is not finite, or whose normal has zero length, are left out of the
+/// tree (they can never be selected); [`CacheIndex::skipped`] counts them. Normals are normalised on entry.
+/// Every query is deterministic: ties in distance are broken by cache id, never by tree layout or thread.
+pub struct CacheIndex {
+    /// None when no cache is usable (kiddo needs at least one point).
+    tree: Option<ImmutableKdTree<f32, 3>>,
+    /// Tree item → cache id.
+    ids: Vec<u32>,
+    /// Position and unit normal of every cache, by cache id (skipped ones too, unused).
+    points: Vec<(Vec3A, Vec3A)>,
+    lookup: LookupParams,
+    lambda: f32,
+    cos_max: f32,
+    /// The exact-hit radius EXACT_HIT · L.
+    exact_radius: f32,
+    skipped: usize,
+}
+
+impl std::fmt::Debug for CacheIndex {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CacheIndex")
+            .field("caches", &self.ids.len())
+            .field("skipped", &self.skipped)
+            .field("lookup", &self.lookup)
+            .field("lambda", &self.lambda)
+            .field("exact_radius", &self.exact_radius)
+            .finish()
+    }
+}
+
+/// Whether a cache or query point can take part in a lookup.
+fn usable(p: Vec3A, n: Vec3A) -> bool {
+    p.is_finite() && n.is_finite() && n.length_squared() > 0.0
+}
+
+impl CacheIndex {
+    /// Builds the index over `points` (position, normal) — cache `i` is `points[i]` — with the selection
+    /// `lookup` and the Eq. 5 weight `lambda` (0.5/L in the paper).
+    ///
+    /// The exact-hit radius is `EXACT_HIT` times the diagonal of the caches' bounding box; the driver can set
+    /// it from the scene diagonal L with [`CacheIndex::with_scene_diagonal`].
+    pub fn new(points: &[(Vec3A, Vec3A)], lookup: LookupParams, lambda: f32) -> Self {
+        let mut ids = Vec::with_capacity(points.len());
+        let mut coords = Vec::with_capacity(points.len());
+        let mut stored = Vec::with_capacity(points.len());
+        let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
+        for (i, &(p, n)) in points.iter().enumerate() {
+            if usable(p, n) && i <= u32::MAX as usize {
+                ids.push(i as u32);
+                coords.push(p.to_array());
+                lo = lo.min(p);
+                hi = hi.max(p);
+                stored.push((p, n.normalize()));
+            } else {
+                stored.push((p, n));
+            }
+        }
+        let skipped = points.len() - ids.len();
+        // kiddo's immutable tree has soft buckets (VecOfArenas), so any number of coincident positions is
+        // accepted; construction can only fail on item-index overflow, which `ids` rules out.
+        let tree = if coords.is_empty() { None } else { ImmutableKdTree::<f32, 3>::new_from_slice(&coords).ok() };
+        let diagonal = if ids.is_empty() { 0.0 } else { (hi - lo).length() };
+        let lambda = if lambda.is_finite() { lambda.max(0.0) } else { 0.0 };
+        let theta = lookup.theta_max_deg.to_radians();
+        let cos_max = if theta.is_finite() { theta.cos() } else { 1.0 };
+        CacheIndex { tree, ids, points: stored, lookup, lambda, cos_max, exact_radius: EXACT_HIT * diagonal, skipped }
+    }
+
+    /// Sets the exact-hit radius from the scene diagonal L (`EXACT_HIT · L`, ALGORITHMS.md §5 step 6).
+    pub fn with_scene_diagonal(mut self, l: f32) -> Self {
+        if l.is_finite() && l > 0.0 {
+            self.exact_radius = EXACT_HIT * l;
+        }
+        self
+    }
+
+    /// Number of caches in the tree (usable ones).
+    pub fn len(&self) -> usize {
+        self.ids.len()
+    }
+
+    /// Whether no cache can be selected.
+    pub fn is_empty(&self) -> bool {
+        self.ids.is_empty()
+    }
+
+    /// How many of the given caches were left out for a non-finite position or normal.
+    pub fn skipped(&self) -> usize {
+        self.skipped
+    }
+
+    /// The selection parameters.
+    pub fn lookup(&self) -> &LookupParams {
+        &self.lookup
+    }
+
+    /// The λ of Eq. 5.
+    pub fn lambda(&self) -> f32 {
+        self.lambda
+    }
+
+    /// Position and (normalised) normal of cache `id`, if it exists.
+    pub fn point(&self, id: u32) -> Option<(Vec3A, Vec3A)> {
+        self.points.get(id as usize).copied()
+    }
+
+    /// Eq. 5 distance between cache `id` and the shading point (p, n).
+    #[inline]
+    fn dist(&self, id: u32, p: Vec3A, n: Vec3A) -> f32 {
+        let (pc, nc) = self.points[id as usize];
+        (pc - p).length() + self.lambda * (1.0 - nc.dot(n)).max(0.0).sqrt()
+    }
+
+    /// Selects the caches for shading point (p, n) into `out` (cleared first), sorted by Dist, then id —
+    /// ALGORITHMS.md §5 steps 1–5:
+    /// 1. the N nearest caches by Euclidean distance (ties at the N-th distance broken by id);
+    /// 2. keep those with n_c·n_s ≥ cos θ_max;
+    /// 3. Dist = ‖p_c − p_s‖ + λ·sqrt(max(0, 1 − n_c·n_s)) (Eq. 5);
+    /// 4. keep the M smallest;
+    /// 5. if step 2 kept none, use all N candidates in steps 3–4.
+    ///
+    /// A query with a non-finite position or normal selects nothing. `n` should be unit length.
+    pub fn select(&self, p: Vec3A, n: Vec3A, out: &mut Vec<Neighbour>) {
+        out.clear();
+        let Some(tree) = &self.tree else { return };
+        if !p.is_finite() || !n.is_finite() || self.lookup.keep == 0 {
+            return;
+        }
+        let n_cand = self.lookup.candidates.min(self.ids.len());
+        let Some(n_cand) = NonZeroUsize::new(n_cand) else { return };
+        let mut cand = self.nearest(tree, p, n_cand);
+        // Step 2 (normal filter) keeps the candidates in place; step 5 falls back to all of them.
+        let kept = cand.iter().filter(|&&id| self.points[id as usize].1.dot(n) >= self.cos_max).count();
+        if kept > 0 {
+            cand.retain(|&id| self.points[id as usize].1.dot(n) >= self.cos_max);
+        }
+        out.extend(cand.into_iter().map(|id| Neighbour { id, dist: self.dist(id, p, n) }));
+        out.sort_unstable_by(|a, b| a.dist.total_cmp(&b.dist).then(a.id.cmp(&b.id)));
+        out.truncate(self.lookup.keep);
+    }
+
+    /// The ids of the `k` nearest caches to `p`, ties at the k-th distance broken by id so the set does
+    /// not depend on the tree layout.
+    fn nearest(&self, tree: &ImmutableKdTree<f32, 3>, p: Vec3A, k: NonZeroUsize) -> Vec<u32> {
+        let q = p.to_array();
+        let k1 = k.get() + 1;
+        let res = match NonZeroUsize::new(k1) {
+            Some(k1) if k1.get() <= self.ids.len() => tree.query(&q).nearest_n::<SquaredEuclidean<f32>>(k1).execute(),
+            _ => tree.query(&q).nearest_n::<SquaredEuclidean<f32>>(k).execute(),
+        };
+        let k = k.get();
+        // With one extra result we can tell whether the k-th distance is tied with a point left out; only then
+        // (coincident or symmetric caches) gather every point at that distance and break the tie by id.
+        let tied = res.len() > k && res[k].distance <= res[k - 1].distance;
+        if !tied {
+            return res.iter().take(k).map(|r| self.ids[r.item as usize]).collect();
+        }
+        let radius = res[k - 1].distance;
+        let mut all: Vec<(f32, u32)> = tree
+            .query(&q)
+            .within::<SquaredEuclidean<f32>>(radius)
+            .execute()
+            .iter()
+            .map(|r| (r.distance, self.ids[r.item as usize]))
+            .collect();
+        all.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        all.into_iter().take(k).map(|(_, id)| id).collect()
+    }
+
+    /// Normalised interpolation weights for a selection (ALGORITHMS.md §5 step 6): w_i = 1/Dist_i divided by
+    /// Σ w, as (cache id, weight) pairs in `out` (cleared first). If a cache is closer than the exact-hit
+    /// radius (Dist ≤ EXACT_HIT · L), `out` holds that cache alone with weight 1. Entries with a non-finite
+    /// Dist are ignored; an empty selection gives an empty `out`.
+    pub fn interpolate_weights(&self, near: &[Neighbour], out: &mut Vec<(u32, f32)>) {
+        out.clear();
+        let finite = near.iter().filter(|nb| nb.dist.is_finite() && nb.dist >= 0.0);
+        if let Some(hit) = finite
+            .clone()
+            .filter(|nb| nb.dist <= self.exact_radius)
+            .min_by(|a, b| a.dist.total_cmp(&b.dist).then(a.id.cmp(&b.id)))
+        {
+            out.push((hit.id, 1.0));
+            return;
+        }
+        out.extend(finite.map(|nb| (nb.id, 1.0 / nb.dist)));
+        let sum: f32 = out.iter().map(|&(_, w)| w).sum();
+        if sum > 0.0 && sum.is_finite() {
+            for (_, w) in out.iter_mut() {
+                *w /= sum;
+            }
+        } else if !out.is_empty() {
+            // Every distance below f32 precision of 1/Dist: fall back to equal weights.
+            let w = 1.0 / out.len() as f32;
+            out.iter_mut().for_each(|e| e.1 = w);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Rng;
+
+    /// Seed of every random input in these tests.
+    const SEED: u64 = 0x5eed_cace;
+
+    fn random_unit(r: &mut Rng) -> Vec3A {
+        loop {
+            let v = Vec3A::new(r.uniform() * 2.0 - 1.0, r.uniform() * 2.0 - 1.0, r.uniform() * 2.0 - 1.0);
+            let l = v.length();
+            if l > 0.1 && l <= 1.0 {
+                return v / l;
+            }
+        }
+    }
+
+    /// Random caches: positions in a unit cube, normals in a cone around +z so the filter matters.
+    fn random_caches(r: &mut Rng, n: usize) -> Vec<(Vec3A, Vec3A)> {
+        (0..n)
+            .map(|_| {
+                let p = Vec3A::new(r.uniform(), r.uniform(), r.uniform());
+                let n = (Vec3A::Z + 0.8 * random_unit(r)).normalize();
+                (p, n)
+            })
+            .collect()
+    }
+
+    /// §5 steps 1–5 by brute force.
+    fn brute(points: &[(Vec3A, Vec3A)], lp: LookupParams, lambda: f32, p: Vec3A, n: Vec3A) -> Vec<Neighbour> {
+        let mut by_dist: Vec<(f32, u32)> =
+            points.iter().enumerate().map(|(i, &(pc, _))| ((pc - p).length_squared(), i as u32)).collect();
+        by_dist.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        by_dist.truncate(lp.candidates);
+        let cos = lp.theta_max_deg.to_radians().cos();
+        let mut c: Vec<u32> =
+            by_dist.iter().map(|e| e.1).filter(|&i| points[i as usize].1.normalize().dot(n) >= cos).collect();
+        if c.is_empty() {
+            c = by_dist.iter().map(|e| e.1).collect();
+        }
+        let mut out: Vec<Neighbour> = c
+            .into_iter()
+            .map(|id| {
+                let (pc, nc) = points[id as usize];
+                Neighbour { id, dist: (pc - p).length() + lambda * (1.0 - nc.normalize().dot(n)).max(0.0).sqrt() }
+            })
+            .collect();
+        out.sort_by(|a, b| a.dist.total_cmp(&b.dist).then(a.id.cmp(&b.id)));
+        out.truncate(lp.keep);
+        out
+    }
+
+    #[test]
+    fn selection_matches_brute_force_on_random_caches() {
+        let mut r = Rng::keyed(SEED, 1, 0);
+        for &count in &[1usize, 5, 19, 20, 21, 300, 2000] {
+            let caches = random_caches(&mut r, count);
+            let lp = LookupParams::default();
+            let lambda = 0.5 / 3f32.sqrt();
+            let index = CacheIndex::new(&caches, lp, lambda);
+            assert_eq!(index.len(), count);
+            let mut got = Vec::new();
+            for _ in 0..300 {
+                let p = Vec3A::new(r.uniform() * 1.2 - 0.1, r.uniform() * 1.2 - 0.1, r.uniform() * 1.2 - 0.1);
+                let n = (Vec3A::Z + 1.2 * random_unit(&mut r)).normalize();
+                index.select(p, n, &mut got);
+                let want = brute(&caches, lp, lambda, p, n);
+                assert_eq!(got.len(), want.len(), "{count} caches");
+                for (g, w) in got.iter().zip(&want) {
+                    assert_eq!(g.id, w.id, "{count} caches at {p}");
+                    assert!((g.dist - w.dist).abs() <= 1e-5, "{} vs {}", g.dist, w.dist);
+                }
+                assert!(got.windows(2).all(|w| w[0].dist <= w[1].dist));
+            }
+        }
+    }
+
+    #[test]
+    fn filter_keeps_only_similar_normals_unless_it_falls_back() {
+        let mut r = Rng::keyed(SEED, 2, 0);
+        let caches = random_caches(&mut r, 500);
+        let lp = LookupParams::default();
+        let index = CacheIndex::new(&caches, lp, 0.3);
+        let mut got = Vec::new();
+        let cos = lp.theta_max_deg.to_radians().cos();
+        index.select(Vec3A::splat(0.5), Vec3A::Z, &mut got);
+        assert_eq!(got.len(), lp.keep);
+        assert!(got.iter().all(|nb| index.point(nb.id).is_some_and(|(_, n)| n.dot(Vec3A::Z) >= cos - 1e-6)));
+        // Facing away from every cache: the filter leaves none, so the fallback uses all N candidates.
+        index.select(Vec3A::splat(0.5), -Vec3A::Z, &mut got);
+        assert_eq!(got.len(), lp.keep);
+    }
+
+    #[test]
+    fn many_coincident_caches_are_accepted_and_ties_break_by_id() {
+        // Far more identical positions than kiddo's bucket size (32): a hard-bucket tree would refuse them.
+        let mut caches = vec![(Vec3A::new(1.0, 2.0, 3.0), Vec3A::Y); 5000];
+        caches.push((Vec3A::new(1.5, 2.0, 3.0), Vec3A::Y));
+        caches.extend(std::iter::repeat_n((Vec3A::new(-1.0, 0.0, 0.0), Vec3A::Y), 100));
+        let index = CacheIndex::new(&caches, LookupParams::default(), 0.1);
+        assert_eq!(index.len(), caches.len());
+        let mut got = Vec::new();
+        index.select(Vec3A::new(1.0, 2.0, 3.0), Vec3A::Y, &mut got);
+        let ids: Vec<u32> = got.iter().map(|nb| nb.id).collect();
+        assert_eq!(ids, vec![0, 1, 2, 3, 4, 5]);
+        let brute_ids: Vec<u32> = brute(&caches, LookupParams::default(), 0.1, Vec3A::new(1.0, 2.0, 3.0), Vec3A::Y)
+            .iter()
+            .map(|nb| nb.id)
+            .collect();
+        assert_eq!(ids, brute_ids);
+        index.select(Vec3A::new(-1.0, 0.1, 0.0), Vec3A::Y, &mut got);
+        assert_eq!(got.iter().map(|nb| nb.id).collect::<Vec<_>>(), vec![5001, 5002, 5003, 5004, 5005, 5006]);
+    }
+
+    #[test]
+    fn fewer_caches_than_candidates_and_empty_index() {
+        let caches = vec![(Vec3A::ZERO, Vec3A::Z), (Vec3A::X, Vec3A::Z), (Vec3A::Y, Vec3A::X)];
+        let index = CacheIndex::new(&caches, LookupParams::default(), 0.5);
+        let mut got = Vec::new();
+        index.select(Vec3A::new(0.1, 0.0, 0.0), Vec3A::Z, &mut got);
+        assert_eq!(got.iter().map(|nb| nb.id).collect::<Vec<_>>(), vec![0, 1]);
+        let empty = CacheIndex::new(&[], LookupParams::default(), 0.5);
+        assert!(empty.is_empty());
+        empty.select(Vec3A::ZERO, Vec3A::Z, &mut got);
+        assert!(got.is_empty());
+    }
+
+    #[test]
+    fn nan_caches_are_skipped_and_nan_queries_select_nothing() {
+        let caches = vec![
+            (Vec3A::new(f32::NAN, 0.0, 0.0), Vec3A::Z),
+            (Vec3A::ZERO, Vec3A::new(f32::NAN, 0.0, 1.0)),
+            (Vec3A::ZERO, Vec3A::ZERO),
+            (Vec3A::X, Vec3A::Z),
+            (Vec3A::new(f32::INFINITY, 0.0, 0.0), Vec3A::Z),
+        ];
+        let index = CacheIndex::new(&caches, LookupParams::default(), 0.5);
+        assert_eq!((index.len(), index.skipped()), (1, 4));
+        let mut got = Vec::new();
+        index.select(Vec3A::ZERO, Vec3A::Z, &mut got);
+        assert_eq!(got.iter().map(|nb| nb.id).collect::<Vec<_>>(), vec![3]);
+        index.select(Vec3A::new(f32::NAN, 0.0, 0.0), Vec3A::Z, &mut got);
+        assert!(got.is_empty());
+        index.select(Vec3A::ZERO, Vec3A::new(0.0, f32::NAN, 1.0), &mut got);
+        assert!(got.is_empty());
+    }
+
+    #[test]
+    fn weights_are_inverse_distances_and_an_exact_hit_stands_alone() {
+        let caches = vec![(Vec3A::ZERO, Vec3A::Z), (Vec3A::X, Vec3A::Z), (Vec3A::new(3.0, 0.0, 0.0), Vec3A::Z)];
+        let index = CacheIndex::new(&caches, LookupParams::default(), 0.5).with_scene_diagonal(10.0);
+        let mut near = Vec::new();
+        let mut w = Vec::new();
+        index.select(Vec3A::new(0.5, 0.0, 0.0), Vec3A::Z, &mut near);
+        index.interpolate_weights(&near, &mut w);
+        assert_eq!(w.len(), 3);
+        let sum: f32 = w.iter().map(|e| e.1).sum();
+        assert!((sum - 1.0).abs() < 1e-6);
+        // Dist 0.5, 0.5, 2.5 ⇒ weights 2, 2, 0.4 normalised.
+        assert!((w[0].1 - 2.0 / 4.4).abs() < 1e-6 && (w[2].1 - 0.4 / 4.4).abs() < 1e-6, "{w:?}");
+        index.select(Vec3A::X, Vec3A::Z, &mut near);
+        index.interpolate_weights(&near, &mut w);
+        assert_eq!(w, vec![(1, 1.0)]);
+        index.select(Vec3A::new(1.0 + 5e-7, 0.0, 0.0), Vec3A::Z, &mut near);
+        index.interpolate_weights(&near, &mut w);
+        assert_eq!(w, vec![(1, 1.0)], "within 1e-7·L of cache 1");
+        index.interpolate_weights(&[], &mut w);
+        assert!(w.is_empty());
+    }
+
+    #[test]
+    fn lookups_do_not_depend_on_the_thread_count() {
+        let mut r = Rng::keyed(SEED, 3, 0);
+        let caches = random_caches(&mut r, 20_000);
+        let queries: Vec<Vec3A> = (0..2000).map(|_| Vec3A::new(r.uniform(), r.uniform(), r.uniform())).collect();
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let index = CacheIndex::new(&caches, LookupParams::default(), 0.3);
+                let mut out = Vec::new();
+                let mut all = Vec::new();
+                for &q in &queries {
+                    index.select(q, Vec3A::Z, &mut out);
+                    all.extend(out.iter().map(|nb| nb.id));
+                }
+                all
+            })
+        };
+        assert_eq!(run(1), run(2));
     }
 }

@@ -6,7 +6,28 @@
 //! Strategy names (what users type and reports print) are resolved by [`registry::strategy`].
 //! Depends on `gbuffer`, `cache` (the §5 neighbour selection) and `sampling`; never on `render` or `scene`.
 
+pub mod adaptive;
+pub mod discontinuity;
+pub mod image_uniform;
 pub mod registry;
+pub mod spatial_directional;
+pub mod view_guided;
+
+mod budget;
+mod cluster;
+mod discrete2d;
+mod hierarchy;
+mod points;
+mod search;
+mod split;
+#[cfg(test)]
+mod test_scenes;
+
+pub use adaptive::AdaptiveSampling;
+pub use discontinuity::Discontinuity;
+pub use image_uniform::ImageUniform;
+pub use spatial_directional::SpatialDirectional;
+pub use view_guided::ViewGuided;
 
 use std::fmt::Debug;
 use std::ops::Range;

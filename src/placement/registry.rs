@@ -1,8 +1,14 @@
-//! STAGE 4: the one registry of placement strategies, by the names users type.
+//! STAGE 4: the one registry of placement strategies, by the names users type (DESIGN.md §2, STYLE habit
+//! 10: one explicit table, no self-registration).
+//!
+//! Depends only on the strategy types of this module's parent.
 
 use crate::error::{Error, Result};
 
-use super::{AdaptivePlacement, InitialPlacement};
+use super::{
+    AdaptivePlacement, AdaptiveSampling, DgsTerms, Discontinuity, ImageUniform, InitialPlacement, SpatialDirectional,
+    ViewGuided,
+};
 
 /// A placement strategy: a first stage and, for two-stage strategies, a second.
 #[derive(Debug)]
@@ -20,6 +26,80 @@ pub struct Strategy {
 pub const NAMES: [&str; 8] = ["im", "sd", "sd+as", "vgc", "vgc+dgs", "vgc+as", "vgc+dgs:diff", "vgc+dgs:geom"];
 
 /// Looks a strategy up by name; an unknown name is an error listing the valid ones.
+///
+/// | name | stage 1 | stage 2 |
+/// |---|---|---|
+/// | `im` | IM | — |
+/// | `sd` | SD | — |
+/// | `sd+as` | SD | AS |
+/// | `vgc` | VGC | — |
+/// | `vgc+dgs` | VGC | DGS with the terms of `PlacementParams::dgs` (Eq. 4: all three by default) |
+/// | `vgc+as` | VGC | AS (Table 2 ablation) |
+/// | `vgc+dgs:diff` | VGC | DGS with Diff_avg′ + Diff_max′ only (Table 2 "DGS (diff)") |
+/// | `vgc+dgs:geom` | VGC | DGS with G′ only (Table 2 "DGS (geom)") |
+///
+/// For two-stage strategies VGC is told its budget is the first-stage share, so σ_a follows the total.
 pub fn strategy(name: &str) -> Result<Strategy> {
-    Err(Error::usage(format!("unknown placement \"{name}\"; expected one of: none, {}", NAMES.join(", "))))
+    let dgs = |terms| -> Box<dyn AdaptivePlacement> { Box::new(Discontinuity { terms }) };
+    let (initial, adaptive): (Box<dyn InitialPlacement>, Option<Box<dyn AdaptivePlacement>>) = match name {
+        "im" => (Box::new(ImageUniform), None),
+        "sd" => (Box::new(SpatialDirectional), None),
+        "sd+as" => (Box::new(SpatialDirectional), Some(Box::new(AdaptiveSampling))),
+        "vgc" => (Box::new(ViewGuided { two_stage: false }), None),
+        "vgc+dgs" => (Box::new(ViewGuided { two_stage: true }), Some(dgs(None))),
+        "vgc+as" => (Box::new(ViewGuided { two_stage: true }), Some(Box::new(AdaptiveSampling))),
+        "vgc+dgs:diff" => {
+            (Box::new(ViewGuided { two_stage: true }), Some(dgs(Some(DgsTerms { diff: true, geometry: false }))))
+        }
+        "vgc+dgs:geom" => {
+            (Box::new(ViewGuided { two_stage: true }), Some(dgs(Some(DgsTerms { diff: false, geometry: true }))))
+        }
+        _ => {
+            return Err(Error::usage(format!(
+                "unknown placement \"{name}\"; expected one of: none, {}",
+                NAMES.join(", ")
+            )));
+        }
+    };
+    let name = NAMES.iter().copied().find(|&n| n == name).unwrap_or("?");
+    Ok(Strategy { name, initial, adaptive })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::placement::PlacementParams;
+    use crate::placement::test_scenes::{self as ts, MaskOracle};
+
+    #[test]
+    fn every_name_resolves_and_two_stage_ones_have_a_second_stage() {
+        for name in NAMES {
+            let s = strategy(name).unwrap();
+            assert_eq!(s.name, name);
+            assert_eq!(s.adaptive.is_some(), name.contains('+'), "{name}");
+        }
+        let e = strategy("vgc+foo").unwrap_err().to_string();
+        assert!(e.contains("vgc+foo") && NAMES.iter().all(|n| e.contains(n)), "{e}");
+    }
+
+    #[test]
+    fn every_strategy_spends_the_total_budget_exactly() {
+        let g = ts::sphere_on_plane(128, 96);
+        let p = PlacementParams::default();
+        let total = 900usize;
+        for name in NAMES {
+            let s = strategy(name).unwrap();
+            let n1 =
+                if s.adaptive.is_some() { ((1.0 - p.ratio as f64) * total as f64).round() as usize } else { total };
+            let s1 = s.initial.place(&g, n1, &p, 4).unwrap();
+            assert_eq!(s1.sites.len(), n1, "{name}");
+            let mut oracle = MaskOracle::new(&g, &s1.sites);
+            if let Some(a) = &s.adaptive {
+                let info = a.place(&g, &s1, &mut oracle, total - s1.sites.len(), &p, 4).unwrap();
+                assert_eq!(info.added, total - n1, "{name}");
+            }
+            assert_eq!(oracle.sites.len(), total, "{name}");
+            ts::check_sites(&g, &oracle.sites);
+        }
+    }
 }

@@ -1,0 +1,372 @@
+//! STAGE 4, second stage **DGS**: discontinuity-guided sampling, the second stage of the paper's method
+//! (paper §3.2, Eq. 3–4; ALGORITHMS.md §4.5). A per-pixel map D = Diff_avg′ + Diff_max′ + G′ is built from
+//! the differences between the first-stage caches each pixel would blend and from the normals in a window
+//! around it; N2 new caches are drawn from D without replacement (marginal row, conditional column).
+//!
+//! Depends on `gbuffer`, `cache` (the §5 selection), the shared placement helpers and `sampling`; sees cache
+//! records only through [`CacheOracle::diff_many`]. Never depends on `render`, `scene` or an application.
+
+use glam::Vec3A;
+use rayon::prelude::*;
+
+use super::budget::{free_usable, pick_uniform};
+use super::discrete2d::Discrete2D;
+use super::points::usable_normal;
+use super::{AdaptiveInfo, AdaptivePlacement, CacheId, CacheOracle, DgsTerms, PlacementParams, Stage1};
+use crate::cache::CacheIndex;
+use crate::error::Result;
+use crate::gbuffer::{GBuffer, PixelId};
+use crate::sampling::Rng;
+
+/// Stream tags of DGS's random decisions.
+const STAGE_DRAW: u64 = 0x4447_0001;
+const STAGE_FALLBACK: u64 = 0x4447_0002;
+/// Rows per parallel band when gathering neighbour sets.
+const BAND: usize = 8;
+
+/// DGS — discontinuity-guided sampling.
+///
+/// | option | type | default | meaning |
+/// |---|---|---|---|
+/// | `terms` | Option<DgsTerms> | None | which terms form D; `None` takes `PlacementParams::dgs` (ablations `vgc+dgs:diff`, `vgc+dgs:geom` fix it) |
+/// | `PlacementParams::lookup` | LookupParams | N = 20, 30°, M = 6 | the §5 selection; its M is K, the caches compared per pixel (A9) |
+/// | `PlacementParams::dgs_window` | usize | 5 | side of the G window (Eq. 3) |
+///
+/// D is 0 on invalid pixels and on every existing cache; each term is min–max normalised over usable pixels
+/// (A11). When D sums to 0 (or runs out) the rest is drawn uniformly from free usable pixels. The map is
+/// returned in [`AdaptiveInfo::discontinuity`]. Applications whose D should omit G (importance caching,
+/// ALGORITHMS.md §4.5.4) are configured by the driver through `PlacementParams::dgs`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Discontinuity {
+    /// Fixed terms (ablations), or `None` for `PlacementParams::dgs`.
+    pub terms: Option<DgsTerms>,
+}
+
+/// Position and normal of every evaluated cache (NaN for a site that is not usable, which the index skips).
+fn cache_points(g: &GBuffer, oracle: &dyn CacheOracle) -> Vec<(Vec3A, Vec3A)> {
+    (0..oracle.len() as CacheId)
+        .map(|c| {
+            g.get(oracle.site(c))
+                .and_then(|sp| usable_normal(sp).map(|n| (sp.p, n)))
+                .unwrap_or((Vec3A::NAN, Vec3A::NAN))
+        })
+        .collect()
+}
+
+/// The neighbour sets of one band of rows: per pixel an index into the band's sets (u32::MAX = none), the
+/// sets (sorted cache ids, concatenated) and the band's distinct pairs (a < b, packed a << 32 | b, sorted).
+#[derive(Default)]
+struct Band {
+    pixel_set: Vec<u32>,
+    ids: Vec<u32>,
+    off: Vec<u32>,
+    pairs: Vec<u64>,
+}
+
+fn gather_band(g: &GBuffer, index: &CacheIndex, rows: std::ops::Range<usize>) -> Band {
+    let mut b = Band { off: vec![0], ..Default::default() };
+    let mut near = Vec::new();
+    let mut set: Vec<u32> = Vec::new();
+    for y in rows {
+        let mut prev: Option<u32> = None;
+        for x in 0..g.width {
+            let Some((p, n)) = g.get(g.id(x, y)).and_then(|sp| usable_normal(sp).map(|n| (sp.p, n))) else {
+                b.pixel_set.push(u32::MAX);
+                prev = None;
+                continue;
+            };
+            index.select(p, n, &mut near);
+            set.clear();
+            set.extend(near.iter().map(|nb| nb.id));
+            set.sort_unstable();
+            // Neighbouring pixels usually blend the same caches: reuse the previous pixel's set.
+            if let Some(s) =
+                prev.filter(|&s| b.ids[b.off[s as usize] as usize..b.off[s as usize + 1] as usize] == set[..])
+            {
+                b.pixel_set.push(s);
+                continue;
+            }
+            let s = (b.off.len() - 1) as u32;
+            for (i, &a) in set.iter().enumerate() {
+                b.pairs.extend(set[i + 1..].iter().map(|&c| ((a as u64) << 32) | c as u64));
+            }
+            b.ids.extend_from_slice(&set);
+            b.off.push(b.ids.len() as u32);
+            b.pixel_set.push(s);
+            prev = Some(s);
+        }
+    }
+    b.pairs.sort_unstable();
+    b.pairs.dedup();
+    b
+}
+
+/// Distinct pairs with their differences, indexed by first cache (CSR) for lookups.
+struct PairTable {
+    pairs: Vec<u64>,
+    diffs: Vec<f32>,
+    first: Vec<u32>,
+}
+
+impl PairTable {
+    fn get(&self, a: u32, b: u32) -> f32 {
+        let (a, b) = if a < b { (a, b) } else { (b, a) };
+        let lo = self.first.get(a as usize).copied().unwrap_or(0) as usize;
+        let hi = self.first.get(a as usize + 1).copied().unwrap_or(0) as usize;
+        let key = ((a as u64) << 32) | b as u64;
+        match self.pairs.get(lo..hi).map(|s| s.binary_search(&key)) {
+            Some(Ok(i)) => self.diffs.get(lo + i).copied().unwrap_or(0.0),
+            _ => 0.0,
+        }
+    }
+}
+
+/// Diff_avg and Diff_max per pixel (ALGORITHMS.md §4.5.3, all unordered pairs of the K caches, A10). Every
+/// distinct pair over the whole image is evaluated in one `diff_many` call.
+fn diff_terms(g: &GBuffer, index: &CacheIndex, oracle: &dyn CacheOracle) -> (Vec<f32>, Vec<f32>) {
+    let bands: Vec<Band> = (0..g.height.div_ceil(BAND))
+        .into_par_iter()
+        .map(|i| gather_band(g, index, i * BAND..((i + 1) * BAND).min(g.height)))
+        .collect();
+    let mut pairs: Vec<u64> = bands.iter().flat_map(|b| b.pairs.iter().copied()).collect();
+    pairs.par_sort_unstable();
+    pairs.dedup();
+    let unpacked: Vec<(CacheId, CacheId)> = pairs.iter().map(|&k| ((k >> 32) as u32, k as u32)).collect();
+    let mut diffs = oracle.diff_many(&unpacked);
+    diffs.resize(pairs.len(), 0.0);
+    diffs.iter_mut().filter(|d| !d.is_finite()).for_each(|d| *d = 0.0);
+    let mut first = vec![0u32; oracle.len() + 1];
+    for &(a, _) in &unpacked {
+        if let Some(f) = first.get_mut(a as usize + 1) {
+            *f += 1;
+        }
+    }
+    for i in 1..first.len() {
+        first[i] += first[i - 1];
+    }
+    let table = PairTable { pairs, diffs, first };
+    let per_band: Vec<(Vec<f32>, Vec<f32>)> = bands.par_iter().map(|b| band_terms(b, &table)).collect();
+    let mut avg = Vec::with_capacity(g.width * g.height);
+    let mut max = Vec::with_capacity(g.width * g.height);
+    for (a, m) in per_band {
+        avg.extend(a);
+        max.extend(m);
+    }
+    (avg, max)
+}
+
+/// Per-pixel (Diff_avg, Diff_max) of one band from its sets (K < 2 ⇒ 0).
+fn band_terms(b: &Band, table: &PairTable) -> (Vec<f32>, Vec<f32>) {
+    let set_terms: Vec<(f32, f32)> = (0..b.off.len() - 1)
+        .map(|s| {
+            let set = &b.ids[b.off[s] as usize..b.off[s + 1] as usize];
+            let (mut sum, mut max, mut n) = (0f64, 0f32, 0u32);
+            for (i, &a) in set.iter().enumerate() {
+                for &c in &set[i + 1..] {
+                    let d = table.get(a, c);
+                    sum += d as f64;
+                    max = max.max(d);
+                    n += 1;
+                }
+            }
+            (if n > 0 { (sum / n as f64) as f32 } else { 0.0 }, max)
+        })
+        .collect();
+    b.pixel_set.iter().map(|&s| set_terms.get(s as usize).copied().unwrap_or((0.0, 0.0))).unzip()
+}
+
+/// G(s) = Σ_{q in the window, q usable, q ≠ s} (1 − n_s·n_q) (Eq. 3); 0 for unusable pixels.
+fn geometry_term(g: &GBuffer, window: usize) -> Vec<f32> {
+    let r = (window.max(1) / 2) as isize;
+    let normals: Vec<Option<Vec3A>> = g.points.par_iter().map(|sp| sp.as_ref().and_then(usable_normal)).collect();
+    (0..g.width * g.height)
+        .into_par_iter()
+        .map(|i| {
+            let Some(ns) = normals[i] else { return 0.0 };
+            let (x, y) = ((i % g.width) as isize, (i / g.width) as isize);
+            let mut sum = 0.0;
+            for qy in (y - r).max(0)..=(y + r).min(g.height as isize - 1) {
+                for qx in (x - r).max(0)..=(x + r).min(g.width as isize - 1) {
+                    if (qx, qy) != (x, y) {
+                        if let Some(nq) = normals[qy as usize * g.width + qx as usize] {
+                            sum += 1.0 - ns.dot(nq);
+                        }
+                    }
+                }
+            }
+            sum
+        })
+        .collect()
+}
+
+/// Min–max normalisation to [0, 1] over the pixels where `mask` is set (A11); 0 when max = min.
+fn normalise(v: &mut [f32], mask: &[bool]) {
+    let (lo, hi) = v
+        .iter()
+        .zip(mask)
+        .filter(|(_, m)| **m)
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), (&x, _)| (lo.min(x), hi.max(x)));
+    let range = hi - lo;
+    v.par_iter_mut().zip(mask).for_each(|(x, &m)| {
+        *x = if m && range > 0.0 && range.is_finite() { ((*x - lo) / range).clamp(0.0, 1.0) } else { 0.0 };
+    });
+}
+
+/// The discontinuity map D of Eq. 4 with the chosen terms, 0 on unusable pixels and existing caches.
+pub(crate) fn discontinuity_map(
+    g: &GBuffer,
+    oracle: &dyn CacheOracle,
+    terms: DgsTerms,
+    params: &PlacementParams,
+) -> Vec<f32> {
+    let mask: Vec<bool> = g.points.par_iter().map(|sp| sp.as_ref().and_then(usable_normal).is_some()).collect();
+    let mut d = vec![0f32; g.width * g.height];
+    if terms.diff && oracle.len() >= 2 {
+        let caches = cache_points(g, oracle);
+        let l = g.scene_diagonal;
+        let lambda = params.lambda_for(if l.is_finite() && l > 0.0 { l } else { 1.0 });
+        let index = CacheIndex::new(&caches, params.lookup, lambda).with_scene_diagonal(l);
+        let (mut avg, mut max) = diff_terms(g, &index, oracle);
+        normalise(&mut avg, &mask);
+        normalise(&mut max, &mask);
+        d.par_iter_mut().zip(avg.par_iter().zip(&max)).for_each(|(d, (a, m))| *d += a + m);
+    }
+    if terms.geometry {
+        let mut geo = geometry_term(g, params.dgs_window);
+        normalise(&mut geo, &mask);
+        d.par_iter_mut().zip(&geo).for_each(|(d, x)| *d += x);
+    }
+    for c in 0..oracle.len() as CacheId {
+        if let Some(v) = d.get_mut(oracle.site(c) as usize) {
+            *v = 0.0;
+        }
+    }
+    d.par_iter_mut().zip(&mask).for_each(|(d, &m)| {
+        if !m || !d.is_finite() {
+            *d = 0.0
+        }
+    });
+    d
+}
+
+/// Draws `budget` distinct pixels from `map` without replacement (draw i uses the stream (seed, draw, i));
+/// when the map runs out, the rest are uniform among free usable pixels. Returns the pixels and a note when
+/// fewer could be placed.
+fn draw(g: &GBuffer, map: &[f32], taken: &mut [bool], budget: usize, seed: u64) -> (Vec<PixelId>, Vec<String>) {
+    let mut table = Discrete2D::new(g.width, g.height, map);
+    let mut out = Vec::with_capacity(budget);
+    let mut notes = Vec::new();
+    for i in 0..budget {
+        let mut rng = Rng::keyed(seed, STAGE_DRAW, i as u64);
+        let Some((x, y)) = table.sample(rng.uniform(), rng.uniform()) else { break };
+        table.remove(x, y);
+        let id = g.id(x, y);
+        taken[id as usize] = true;
+        out.push(id);
+    }
+    if out.len() < budget {
+        let mut free = free_usable(g, taken);
+        let rest = pick_uniform(&mut free, budget - out.len(), seed, STAGE_FALLBACK);
+        if out.is_empty() {
+            notes.push("the discontinuity map is zero everywhere: new caches are uniformly random".to_string());
+        }
+        rest.iter().for_each(|&id| taken[id as usize] = true);
+        out.extend(rest);
+        if out.len() < budget {
+            notes.push(format!("only {} free usable pixels remain for a stage-2 budget of {budget}", out.len()));
+        }
+    }
+    (out, notes)
+}
+
+impl AdaptivePlacement for Discontinuity {
+    fn place(
+        &self,
+        g: &GBuffer,
+        _stage1: &Stage1,
+        oracle: &mut dyn CacheOracle,
+        budget: usize,
+        params: &PlacementParams,
+        seed: u64,
+    ) -> Result<AdaptiveInfo> {
+        if budget == 0 {
+            return Ok(AdaptiveInfo::default());
+        }
+        let terms = self.terms.unwrap_or(params.dgs);
+        let map = discontinuity_map(g, oracle, terms, params);
+        let mut taken = vec![false; g.width * g.height];
+        for c in 0..oracle.len() as CacheId {
+            if let Some(t) = taken.get_mut(oracle.site(c) as usize) {
+                *t = true;
+            }
+        }
+        let (sites, notes) = draw(g, &map, &mut taken, budget, seed);
+        if !sites.is_empty() {
+            oracle.evaluate(&sites);
+        }
+        Ok(AdaptiveInfo { added: sites.len(), rounds: 1, discontinuity: Some(map), notes })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::placement::test_scenes::{self as ts, MaskOracle};
+    use crate::placement::{InitialPlacement, ViewGuided};
+
+    #[test]
+    fn dgs_meets_the_contract() {
+        ts::check_adaptive(&Discontinuity::default(), &ViewGuided { two_stage: true }, true);
+        for terms in [DgsTerms { diff: true, geometry: false }, DgsTerms { diff: false, geometry: true }] {
+            ts::check_adaptive(&Discontinuity { terms: Some(terms) }, &ViewGuided { two_stage: true }, terms.diff);
+        }
+    }
+
+    #[test]
+    fn the_map_is_zero_on_caches_and_background_and_pairs_are_evaluated_once() {
+        let g = ts::sphere_on_plane(96, 64);
+        let p = PlacementParams::default();
+        let s1 = ViewGuided::default().place(&g, 300, &p, 1).unwrap();
+        let mut oracle = MaskOracle::new(&g, &s1.sites);
+        let info = Discontinuity::default().place(&g, &s1, &mut oracle, 60, &p, 1).unwrap();
+        assert_eq!(oracle.diff_many_calls.get(), 1);
+        assert_eq!(oracle.evaluate_calls, 1);
+        let map = info.discontinuity.unwrap();
+        assert_eq!(map.len(), 96 * 64);
+        assert!(map.iter().all(|v| v.is_finite() && *v >= 0.0 && *v <= 3.0));
+        assert!(s1.sites.iter().all(|&id| map[id as usize] == 0.0));
+        assert!((0..map.len()).filter(|&i| g.points[i].is_none()).all(|i| map[i] == 0.0));
+        assert!(map.iter().any(|&v| v > 0.0));
+    }
+
+    #[test]
+    fn the_diff_terms_peak_at_the_hidden_step() {
+        let g = ts::flat(128, 96);
+        let p = PlacementParams { dgs: DgsTerms { diff: true, geometry: false }, ..Default::default() };
+        let s1 = ViewGuided::default().place(&g, 400, &p, 1).unwrap();
+        let oracle = MaskOracle::new(&g, &s1.sites);
+        let map = discontinuity_map(&g, &oracle, p.dgs, &p);
+        let near = |id: usize| g.points[id].is_some_and(|sp| (sp.p.x - ts::STEP_X).abs() < 0.3);
+        let mean = |f: &dyn Fn(usize) -> bool| {
+            let v: Vec<f32> = (0..map.len()).filter(|&i| f(i)).map(|i| map[i]).collect();
+            v.iter().sum::<f32>() / v.len().max(1) as f32
+        };
+        let (at, away) = (mean(&near), mean(&|i| g.points[i].is_some() && !near(i)));
+        assert!(at > 5.0 * away, "{at} vs {away}");
+    }
+
+    #[test]
+    fn a_zero_map_falls_back_to_uniform() {
+        // One plane and the geometry term alone: G = 0 everywhere, so the draws are uniform (still exact and
+        // distinct).
+        let g = ts::flat(64, 48);
+        let p = PlacementParams { dgs: DgsTerms { diff: false, geometry: true }, ..Default::default() };
+        let s1 = ViewGuided::default().place(&g, 100, &p, 1).unwrap();
+        let mut oracle = MaskOracle::new(&g, &s1.sites);
+        let info = Discontinuity::default().place(&g, &s1, &mut oracle, 50, &p, 1).unwrap();
+        assert!(info.discontinuity.is_some_and(|m| m.iter().all(|&v| v == 0.0)));
+        assert_eq!(info.added, 50);
+        assert!(info.notes.iter().any(|n| n.contains("uniformly")), "{:?}", info.notes);
+        ts::check_sites(&g, &oracle.sites);
+    }
+}
