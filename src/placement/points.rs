@@ -163,6 +163,7 @@ mod tests {
                 depth: 1.0,
                 uv: [0.0; 2],
                 material: 0,
+                origin: None,
             })
         });
         let pts = collect(&g, 1.0);
