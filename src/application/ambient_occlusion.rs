@@ -82,7 +82,13 @@ impl Application for CacheAo {
         "cacheao"
     }
 
-    fn compute_record(&self, scene: &Scene, at: &ShadingPoint, _rng: &mut Rng, rays: &mut RayCounters) -> VisibilityRecord {
+    fn compute_record(
+        &self,
+        scene: &Scene,
+        at: &ShadingPoint,
+        _rng: &mut Rng,
+        rays: &mut RayCounters,
+    ) -> VisibilityRecord {
         self.gather(scene, at, rays)
     }
 
@@ -90,7 +96,14 @@ impl Application for CacheAo {
         a.mask.iter().zip(b.mask.iter()).map(|(x, y)| (x ^ y).count_ones()).sum::<u32>() as f32
     }
 
-    fn shade(&self, _: &Scene, _: &ShadingPoint, near: &[(&VisibilityRecord, f32)], _: &mut Rng, _: &mut RayCounters) -> [f32; 3] {
+    fn shade(
+        &self,
+        _: &Scene,
+        _: &ShadingPoint,
+        near: &[(&VisibilityRecord, f32)],
+        _: &mut Rng,
+        _: &mut RayCounters,
+    ) -> [f32; 3] {
         let (mut sum, mut wsum) = (0.0f32, 0.0f32);
         for (r, w) in near {
             sum += w * r.ao;

@@ -29,7 +29,14 @@ pub trait Application: Sync {
     fn diff(&self, a: &Self::Record, b: &Self::Record) -> f32;
 
     /// Shades one sample from its selected caches with their interpolation weights (Σ weights > 0).
-    fn shade(&self, scene: &Scene, s: &ShadingPoint, near: &[(&Self::Record, f32)], rng: &mut Rng, rays: &mut RayCounters) -> [f32; 3];
+    fn shade(
+        &self,
+        scene: &Scene,
+        s: &ShadingPoint,
+        near: &[(&Self::Record, f32)],
+        rng: &mut Rng,
+        rays: &mut RayCounters,
+    ) -> [f32; 3];
 
     /// The brute-force answer at one sample: what the caches approximate (references, goldens).
     fn reference(&self, scene: &Scene, s: &ShadingPoint, rng: &mut Rng, rays: &mut RayCounters) -> [f32; 3];

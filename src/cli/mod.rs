@@ -2,6 +2,7 @@
 //! can call them; `main.rs` only parses flags, prints and maps errors to exit status 2.
 
 pub mod bench;
+pub mod cache_outputs;
 pub mod compare;
 pub mod info;
 pub mod render;

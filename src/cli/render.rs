@@ -35,6 +35,22 @@ pub struct RenderArgs {
     /// Integrator to use instead of the scene's (e.g. ambientocclusion).
     #[arg(long)]
     pub integrator: Option<String>,
+    /// Cache placement strategy (sets the cacheao parameter "placement"): none, im, sd, sd+as, vgc,
+    /// vgc+dgs, vgc+as, vgc+dgs:diff, vgc+dgs:geom.
+    #[arg(long)]
+    pub placement: Option<String>,
+    /// Total cache budget (sets the cacheao parameter "caches").
+    #[arg(long)]
+    pub caches: Option<u64>,
+    /// Cache-based renders: write the image with stage-1 caches (red) and stage-2 caches (cyan) marked.
+    #[arg(long)]
+    pub overlay: Option<PathBuf>,
+    /// Cache-based renders: write the DGS discontinuity map (EXR/PFM, plus a PNG preview).
+    #[arg(long)]
+    pub dmap: Option<PathBuf>,
+    /// Cache-based renders: write per-stage times, cache counts, search results, rays and memory as JSON.
+    #[arg(long)]
+    pub stats: Option<PathBuf>,
     /// Set an integrator parameter, overriding the scene file (repeatable), e.g. --set nsamples=16.
     #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_key_value)]
     pub set: Vec<(String, String)>,
@@ -58,7 +74,7 @@ pub fn run(args: &RenderArgs) -> Result<String> {
         progress: !args.quiet && std::io::stderr().is_terminal() && std::io::stdout().is_terminal(),
         quick: args.quick,
         integrator: args.integrator.clone(),
-        set: args.set.clone(),
+        set: cli_overrides(args),
     };
     // Settle the output name before rendering, so a bad extension fails fast.
     let out = output_path(args, &loaded.scene.film.filename);
@@ -66,9 +82,58 @@ pub fn run(args: &RenderArgs) -> Result<String> {
     let result = render(&loaded.scene, loaded.integrator.as_ref(), &settings, &mut warnings);
     print_warnings(&warnings);
     let result = result?;
+    // Check every requested output before writing any, so a failed run leaves nothing behind.
+    let cache = result.cache.as_deref();
+    if (args.overlay.is_some() || args.dmap.is_some() || args.stats.is_some()) && cache.is_none() {
+        return Err(crate::Error::usage(
+            "--overlay, --dmap and --stats need a cache-based integrator (--integrator cacheao)",
+        ));
+    }
+    if args.dmap.is_some() && cache.is_some_and(|c| c.discontinuity.is_none()) {
+        return Err(crate::Error::usage(
+            "--dmap: this placement has no discontinuity map (use vgc+dgs or one of its ablations)",
+        ));
+    }
+    for p in [&args.overlay, &args.dmap].into_iter().flatten() {
+        crate::image::Format::from_path(p)?;
+    }
     crate::image::write(&result.image, &out)?;
+    if let Some(c) = cache {
+        if let Some(p) = &args.overlay {
+            crate::cli::cache_outputs::write_overlay(c, p)?;
+        }
+        if let Some(p) = &args.dmap {
+            crate::cli::cache_outputs::write_dmap(c, p)?;
+        }
+        if let Some(p) = &args.stats {
+            let settings = serde_json::json!({
+                "scene": args.scene.display().to_string(),
+                "integrator": result.integrator,
+                "seed": args.seed,
+                "set": cli_overrides(args).iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>(),
+            });
+            crate::cli::cache_outputs::write_stats(c, &settings, p)?;
+        }
+    }
     if args.quiet {
         return Ok(String::new());
+    }
+    if let Some(c) = cache {
+        let rays = result.rays.total() as f64;
+        return Ok(format!(
+            "wrote {} ({}x{}, {} sub-pixel samples, {})\nparse {:.3} s | scene build {:.3} s | BVH build {:.3} s\n{}\nrays {:.1} M: {:.2} Mrays/s",
+            out.display(),
+            result.image.width,
+            result.image.height,
+            result.spp,
+            result.integrator,
+            loaded.stats.parse_secs,
+            loaded.stats.build_secs,
+            loaded.stats.bvh_secs,
+            c.stats.summary(),
+            rays / 1e6,
+            rays / 1e6 / c.stats.times.total.max(1e-9)
+        ));
     }
     let s = &loaded.stats;
     let rays = result.rays.total() as f64;
@@ -97,6 +162,18 @@ pub fn print_warnings(w: &crate::error::Warnings) {
     for w in w.iter() {
         eprintln!("{w}");
     }
+}
+
+/// `--set` pairs plus the `--placement`/`--caches` shorthands (which win, coming last).
+fn cli_overrides(args: &RenderArgs) -> Vec<(String, String)> {
+    let mut set = args.set.clone();
+    if let Some(p) = &args.placement {
+        set.push(("placement".into(), p.clone()));
+    }
+    if let Some(c) = args.caches {
+        set.push(("caches".into(), c.to_string()));
+    }
+    set
 }
 
 fn output_path(args: &RenderArgs, film_name: &Option<PathBuf>) -> PathBuf {

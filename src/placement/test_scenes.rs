@@ -76,7 +76,17 @@ pub fn cast(w: usize, h: usize, eye: Vec3A, at: Vec3A, prims: &[Prim], diagonal:
         let (t, n) = prims.iter().filter_map(|p| hit(p, eye, d)).min_by(|a, b| a.0.total_cmp(&b.0))?;
         let n = if n.dot(d) > 0.0 { -n } else { n };
         let p = eye + t * d;
-        Some(ShadingPoint { p, p_error: Vec3A::ZERO, n, ng: n, wo: -d, depth: t, uv: [0.0; 2], material: 0, origin: None })
+        Some(ShadingPoint {
+            p,
+            p_error: Vec3A::ZERO,
+            n,
+            ng: n,
+            wo: -d,
+            depth: t,
+            uv: [0.0; 2],
+            material: 0,
+            origin: None,
+        })
     })
 }
 

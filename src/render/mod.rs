@@ -4,6 +4,9 @@
 //! Depends on `scene` (what to render), `sampling` and `image`; the scene never depends on this module.
 
 pub mod ao;
+pub mod cache_stats;
+pub mod cacheao;
+pub mod cached;
 mod driver;
 pub mod film;
 pub mod params;
@@ -66,10 +69,12 @@ pub struct RenderOutput {
     pub spp: u32,
     /// The integrator that ran.
     pub integrator: String,
+    /// Cache placement, statistics and maps of a cache-based render.
+    pub cache: Option<Box<cached::CachedOutput>>,
 }
 
 /// The integrators cachert implements, by scene-file name.
-pub const INTEGRATORS: [&str; 1] = ["ambientocclusion"];
+pub const INTEGRATORS: [&str; 2] = ["ambientocclusion", "cacheao"];
 
 /// Builds the integrator named by the scene (or by `settings.integrator`) and renders.
 pub fn render(
@@ -94,6 +99,23 @@ pub fn render(
         sampler.spp = spp;
     }
     let iparams = params::IntegratorParams::new(params, &settings.set);
+    if name == "cacheao" {
+        let (app, cs) = cacheao::settings(&iparams, scene, settings.seed, settings.progress)?;
+        iparams.check_overrides(name)?;
+        report_unused(integrator, name, warnings);
+        let run = || cached::render_cached(scene, &app, &cs);
+        let out = with_threads(settings.threads, run)??;
+        let mut rays = out.stats.cache_rays;
+        rays.add(&out.stats.render_rays);
+        return Ok(RenderOutput {
+            image: out.image.clone(),
+            rays,
+            render_secs: out.stats.times.total,
+            spp: cs.subpixels,
+            integrator: format!("cacheao, placement {}", cs.placement),
+            cache: Some(Box::new(out)),
+        });
+    }
     let pixel: Box<dyn PixelIntegrator> = match name {
         "ambientocclusion" => Box::new(ao::AmbientOcclusion::from_params(&iparams, &sampler, settings.quick)?),
         other => {
@@ -104,6 +126,28 @@ pub fn render(
         }
     };
     iparams.check_overrides(name)?;
+    report_unused(integrator, name, warnings);
+    let run = || render_image(scene, &sampler, pixel.as_ref(), settings.seed, settings.progress);
+    let (image, rays, render_secs) = with_threads(settings.threads, run)?;
+    Ok(RenderOutput { image, rays, render_secs, spp: sampler.spp, integrator: name.to_string(), cache: None })
+}
+
+/// Runs `f` in a pool of `threads` workers (default: rayon's global pool).
+fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
+    match threads {
+        Some(n) => {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(n.max(1))
+                .build()
+                .map_err(|e| Error::usage(format!("cannot start {n} threads: {e}")))?;
+            Ok(pool.install(f))
+        }
+        None => Ok(f()),
+    }
+}
+
+/// Warns about Integrator parameters that the integrator did not read.
+fn report_unused(integrator: Option<&Named>, name: &str, warnings: &mut Warnings) {
     if let Some(n) = integrator.filter(|n| n.name == name) {
         for p in n.params.unused() {
             if p.name != "pixelbounds" {
@@ -111,16 +155,4 @@ pub fn render(
             }
         }
     }
-    let run = || render_image(scene, &sampler, pixel.as_ref(), settings.seed, settings.progress);
-    let (image, rays, render_secs) = match settings.threads {
-        Some(n) => {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(n.max(1))
-                .build()
-                .map_err(|e| Error::usage(format!("cannot start {n} threads: {e}")))?;
-            pool.install(run)
-        }
-        None => run(),
-    };
-    Ok(RenderOutput { image, rays, render_secs, spp: sampler.spp, integrator: name.to_string() })
 }

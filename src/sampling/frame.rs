@@ -62,7 +62,9 @@ mod tests {
         let n1 = Vec3A::new(0.1, 0.2, 0.97).normalize();
         let n2 = (n1 + Vec3A::new(0.017, 0.0, 0.0)).normalize(); // about 1° apart
         let (f1, f2) = (Frame::generic(n1), Frame::generic(n2));
-        assert!(f1.s.dot(f1.t).abs() < 1e-5 && f1.s.dot(f1.n).abs() < 1e-5 && (f1.s.cross(f1.t) - f1.n).length() < 1e-5);
+        assert!(
+            f1.s.dot(f1.t).abs() < 1e-5 && f1.s.dot(f1.n).abs() < 1e-5 && (f1.s.cross(f1.t) - f1.n).length() < 1e-5
+        );
         assert!(f1.s.dot(f2.s) > (3f32.to_radians()).cos(), "tangents of normals 1° apart differ by more than 3°");
         let a = Vec3A::new(1.0, 2.0, 3.0).normalize();
         let f = Frame::generic(a);

@@ -117,7 +117,8 @@ mod tests {
     fn equal_area_cells_have_equal_solid_angles_and_integrate_cosine() {
         // Σ_k cos θ_k · 2π/n² ≈ π (ALGORITHMS.md §12) over the 32×32 cell centres.
         let n = 32;
-        let sum: f64 = grid(n).map(|u| equal_area_hemisphere(u).z as f64).sum::<f64>() * 2.0 * std::f64::consts::PI / (n * n) as f64;
+        let sum: f64 = grid(n).map(|u| equal_area_hemisphere(u).z as f64).sum::<f64>() * 2.0 * std::f64::consts::PI
+            / (n * n) as f64;
         assert!((sum - std::f64::consts::PI).abs() < 0.01 * std::f64::consts::PI, "{sum}");
         for u in grid(n) {
             let w = equal_area_hemisphere(u);

@@ -1,0 +1,126 @@
+//! STAGE 6 (render): what a cache-based render reports — the stage times of the paper's Table 4, cache
+//! counts, the placement search results, rays and memory — as plain data that serialises to JSON.
+
+use serde::Serialize;
+
+use crate::placement::PlacementInfo;
+use crate::scene::ray::RayCounters;
+
+/// Wall seconds of each step (paper Table 4).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct StageTimes {
+    /// Tracing the G-buffer (one shading point per pixel centre).
+    pub shading_points: f64,
+    /// First-stage placement.
+    pub initial_generation: f64,
+    /// Evaluating the first-stage caches.
+    pub initial_computation: f64,
+    /// Second-stage placement (excluding evaluation).
+    pub adaptive_generation: f64,
+    /// Evaluating the second-stage caches.
+    pub adaptive_computation: f64,
+    /// Building the kd-tree.
+    pub kd_tree: f64,
+    /// Shading every sub-pixel sample.
+    pub render: f64,
+    /// Everything.
+    pub total: f64,
+}
+
+/// The report of a cache-based render.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct CacheStats {
+    /// Stage times.
+    pub times: StageTimes,
+    /// Pixels whose centre sees the scene.
+    pub valid_pixels: usize,
+    /// First-stage caches.
+    pub stage1_caches: usize,
+    /// Second-stage caches.
+    pub stage2_caches: usize,
+    /// All caches.
+    pub total_caches: usize,
+    /// Second-stage rounds.
+    pub adaptive_rounds: u32,
+    /// First-stage search results (σ_s, iterations, …).
+    #[serde(serialize_with = "ser_info")]
+    pub placement: PlacementInfo,
+    /// Rays traced evaluating caches.
+    #[serde(serialize_with = "ser_rays")]
+    pub cache_rays: RayCounters,
+    /// Rays traced while shading samples (camera rays; reference occlusion rays).
+    #[serde(serialize_with = "ser_rays")]
+    pub render_rays: RayCounters,
+    /// Bytes of cache records.
+    pub record_bytes: usize,
+    /// Peak resident memory of the process (bytes), where the OS reports it.
+    pub peak_memory_bytes: Option<u64>,
+    /// Remarks (budget above the valid pixels, …).
+    pub notes: Vec<String>,
+}
+
+fn ser_rays<S: serde::Serializer>(r: &RayCounters, s: S) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeStruct;
+    let mut st = s.serialize_struct("rays", 3)?;
+    st.serialize_field("camera", &r.camera)?;
+    st.serialize_field("occlusion", &r.shadow)?;
+    st.serialize_field("total", &r.total())?;
+    st.end()
+}
+
+fn ser_info<S: serde::Serializer>(i: &PlacementInfo, s: S) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeStruct;
+    let mut st = s.serialize_struct("placement", 6)?;
+    st.serialize_field("sigma_s", &i.sigma_s)?;
+    st.serialize_field("sigma_a_deg", &i.sigma_a_deg)?;
+    st.serialize_field("sd_threshold", &i.sd_threshold)?;
+    st.serialize_field("search_iterations", &i.search_iterations)?;
+    st.serialize_field("clusters_found", &i.clusters_found)?;
+    st.serialize_field("notes", &i.notes)?;
+    st.end()
+}
+
+/// Peak resident set size of this process (Linux `VmHWM`), if known.
+pub fn peak_memory_bytes() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+impl CacheStats {
+    /// The end-of-run summary lines.
+    pub fn summary(&self) -> String {
+        let t = &self.times;
+        let mut s = format!(
+            "caches {} ({} stage 1 + {} stage 2) of {} valid pixels\n\
+             shading points {:.3} s | initial gen {:.3} s | initial comp {:.3} s | adaptive gen {:.3} s | adaptive comp {:.3} s | kd-tree {:.3} s | render {:.3} s | total {:.3} s",
+            self.total_caches,
+            self.stage1_caches,
+            self.stage2_caches,
+            self.valid_pixels,
+            t.shading_points,
+            t.initial_generation,
+            t.initial_computation,
+            t.adaptive_generation,
+            t.adaptive_computation,
+            t.kd_tree,
+            t.render,
+            t.total
+        );
+        if let Some(sig) = self.placement.sigma_s {
+            s += &format!(
+                "\nVGC: sigma_s {sig:.5} (sigma_a {:.1} deg) after {} search iterations",
+                self.placement.sigma_a_deg.unwrap_or(0.0),
+                self.placement.search_iterations
+            );
+        }
+        if let Some(th) = self.placement.sd_threshold {
+            s += &format!("\nSD: threshold {th:.5} after {} search iterations", self.placement.search_iterations);
+        }
+        for n in self.notes.iter().chain(&self.placement.notes) {
+            s += &format!("\nnote: {n}");
+        }
+        s
+    }
+}

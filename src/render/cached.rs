@@ -1,0 +1,289 @@
+//! STAGE 6 (render): the one generic cache-based render driver (DESIGN.md §1, ALGORITHMS.md §0):
+//! G-buffer → first-stage placement → evaluate caches → second-stage placement (evaluating what it adds)
+//! → kd-tree → shade every sub-pixel sample from its selected caches. Or, for placement `none`, the
+//! per-sample reference: the application's brute-force answer at every sub-pixel sample. Each step is timed
+//! as in the paper's Table 4.
+//!
+//! Generic over the [`Application`]; placement strategies come from the registry by name. Records are
+//! evaluated in parallel with random streams keyed by the cache's pixel, so results never depend on threads.
+
+use std::time::Instant;
+
+use glam::Vec3A;
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+
+use crate::application::Application;
+use crate::cache::CacheIndex;
+use crate::error::{Error, Result};
+use crate::gbuffer::{GBuffer, PixelId, shading_point};
+use crate::image::Image;
+use crate::placement::{CacheId, CacheOracle, PlacementParams, registry};
+use crate::sampling::Rng;
+use crate::sampling::rng::{hash3, mix64};
+use crate::sampling::sequence::sobol02;
+use crate::scene::Scene;
+use crate::scene::ray::RayCounters;
+
+use super::cache_stats::{CacheStats, StageTimes, peak_memory_bytes};
+
+/// How a cache-based render is set up (the `cacheao` integrator's parameters, resolved).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CacheSettings {
+    /// Strategy name (`vgc+dgs`, …) or `none` for the per-sample reference.
+    pub placement: String,
+    /// Total cache budget N_c.
+    pub caches: usize,
+    /// Placement parameters.
+    pub params: PlacementParams,
+    /// Sub-pixel samples per pixel (the same positions for every method and the reference).
+    pub subpixels: u32,
+    /// Seed of every random decision of placement and evaluation.
+    pub seed: u64,
+    /// Show progress bars.
+    pub progress: bool,
+}
+
+/// What a cache-based render produced besides the image.
+#[derive(Clone, Debug)]
+pub struct CachedOutput {
+    /// The image (cropped film size).
+    pub image: Image,
+    /// Timings, counts, search results.
+    pub stats: CacheStats,
+    /// Pixels of the first-stage caches.
+    pub stage1: Vec<PixelId>,
+    /// Pixels of the second-stage caches.
+    pub stage2: Vec<PixelId>,
+    /// The DGS discontinuity map, when the strategy made one (row-major, G-buffer size).
+    pub discontinuity: Option<Vec<f32>>,
+}
+
+/// Stage tags of random streams.
+const STAGE_RECORD: u64 = 0x7265_636f;
+const STAGE_SHADE: u64 = 0x7368_6164;
+/// Sub-pixel positions use a fixed key, so every method and the reference shade the same samples.
+const SUBPIXEL_KEY: u64 = 0x5355_4250_4958;
+
+/// The evaluated caches: sites, records and what evaluating them cost. Implements [`CacheOracle`].
+struct Store<'a, A: Application> {
+    scene: &'a Scene,
+    app: &'a A,
+    g: &'a GBuffer,
+    seed: u64,
+    sites: Vec<PixelId>,
+    records: Vec<A::Record>,
+    eval_secs: f64,
+    rays: RayCounters,
+    bar: ProgressBar,
+}
+
+impl<A: Application> CacheOracle for Store<'_, A> {
+    fn len(&self) -> usize {
+        self.records.len()
+    }
+
+    fn site(&self, c: CacheId) -> PixelId {
+        self.sites[c as usize]
+    }
+
+    fn diff(&self, a: CacheId, b: CacheId) -> f32 {
+        self.app.diff(&self.records[a as usize], &self.records[b as usize])
+    }
+
+    fn diff_many(&self, pairs: &[(CacheId, CacheId)]) -> Vec<f32> {
+        pairs.par_iter().map(|&(a, b)| self.diff(a, b)).collect()
+    }
+
+    fn evaluate(&mut self, sites: &[PixelId]) {
+        let t = Instant::now();
+        let (scene, app, g, seed, bar) = (self.scene, self.app, self.g, self.seed, &self.bar);
+        let out: Vec<Option<(A::Record, RayCounters)>> = sites
+            .par_iter()
+            .map(|&id| {
+                let sp = g.get(id)?;
+                let mut rng = Rng::keyed(seed, STAGE_RECORD, id as u64);
+                let mut rays = RayCounters::default();
+                let r = app.compute_record(scene, sp, &mut rng, &mut rays);
+                bar.inc(1);
+                Some((r, rays))
+            })
+            .collect();
+        for (&id, r) in sites.iter().zip(out) {
+            if let Some((rec, rays)) = r {
+                self.sites.push(id);
+                self.records.push(rec);
+                self.rays.add(&rays);
+            }
+        }
+        self.eval_secs += t.elapsed().as_secs_f64();
+    }
+}
+
+fn bar(show: bool, len: u64, what: &str) -> ProgressBar {
+    if !show {
+        return ProgressBar::hidden();
+    }
+    let b = ProgressBar::new(len);
+    if let Ok(style) =
+        ProgressStyle::with_template(&format!("{{spinner}} {what} [{{bar:40}}] {{pos}}/{{len}} {{elapsed_precise}}"))
+    {
+        b.set_style(style.progress_chars("=> "));
+    }
+    b
+}
+
+/// The `i`-th of `n` sub-pixel offsets of pixel (x, y): one per cell of a (0,2)-net (a 2×2 stratification
+/// for n = 4), keyed only by the pixel.
+fn subpixel(x: i32, y: i32, i: u32) -> [f32; 2] {
+    let k = mix64(hash3(SUBPIXEL_KEY, x as u32 as u64, y as u32 as u64));
+    sobol02(i, [(k >> 32) as u32, k as u32])
+}
+
+/// Renders `scene` with application `app` and the caches `s` describes.
+pub fn render_cached<A: Application>(scene: &Scene, app: &A, s: &CacheSettings) -> Result<CachedOutput> {
+    let start = Instant::now();
+    let mut times = StageTimes::default();
+    let mut stats = CacheStats::default();
+    let g = GBuffer::from_scene(scene);
+    times.shading_points = start.elapsed().as_secs_f64();
+    stats.valid_pixels = g.valid_count;
+    if g.valid_count == 0 {
+        stats.notes.push("no pixel centre sees the scene: there is nothing to cache, the image is black".into());
+    }
+    let none = s.placement == "none";
+    let mut stage1 = Vec::new();
+    let mut stage2 = Vec::new();
+    let mut discontinuity = None;
+    let mut index_and_store = None;
+    let lambda = s.params.lambda_for(g.scene_diagonal);
+    let mut store = Store {
+        scene,
+        app,
+        g: &g,
+        seed: s.seed,
+        sites: Vec::new(),
+        records: Vec::new(),
+        eval_secs: 0.0,
+        rays: RayCounters::default(),
+        bar: bar(s.progress, s.caches.min(g.valid_count) as u64, "caches"),
+    };
+    if !none && g.valid_count > 0 {
+        let strategy = registry::strategy(&s.placement)?;
+        if s.caches == 0 {
+            return Err(Error::usage("the cache budget \"caches\" must be at least 1"));
+        }
+        let total = s.caches.min(g.valid_count);
+        if s.caches > g.valid_count {
+            stats.notes.push(format!(
+                "{} caches requested but only {} pixels see the scene: every valid pixel becomes a cache",
+                s.caches, g.valid_count
+            ));
+        }
+        let n1 = match strategy.adaptive {
+            Some(_) => (((1.0 - s.params.ratio as f64) * total as f64).round() as usize).clamp(1, total),
+            None => total,
+        };
+        let t = Instant::now();
+        let first = strategy.initial.place(&g, n1, &s.params, s.seed)?;
+        times.initial_generation = t.elapsed().as_secs_f64();
+        store.evaluate(&first.sites);
+        times.initial_computation = store.eval_secs;
+        stats.stage1_caches = store.len();
+        if let Some(second) = &strategy.adaptive {
+            let (t, eval_before) = (Instant::now(), store.eval_secs);
+            let budget = total - store.len();
+            let info = second.place(&g, &first, &mut store, budget, &s.params, s.seed)?;
+            let adaptive_eval = store.eval_secs - eval_before;
+            times.adaptive_computation = adaptive_eval;
+            times.adaptive_generation = t.elapsed().as_secs_f64() - adaptive_eval;
+            stats.adaptive_rounds = info.rounds;
+            stats.notes.extend(info.notes);
+            discontinuity = info.discontinuity;
+        }
+        store.bar.finish_and_clear();
+        stats.stage2_caches = store.len() - stats.stage1_caches;
+        stats.placement = first.info.clone();
+        stage1 = store.sites[..stats.stage1_caches].to_vec();
+        stage2 = store.sites[stats.stage1_caches..].to_vec();
+        let t = Instant::now();
+        let points: Vec<(Vec3A, Vec3A)> =
+            store.sites.iter().map(|&id| g.get(id).map_or((Vec3A::NAN, Vec3A::NAN), |p| (p.p, p.n))).collect();
+        let index = CacheIndex::new(&points, s.params.lookup, lambda).with_scene_diagonal(g.scene_diagonal);
+        times.kd_tree = t.elapsed().as_secs_f64();
+        index_and_store = Some(index);
+    }
+    stats.cache_rays = store.rays;
+    let t = Instant::now();
+    let (image, render_rays) = shade_image(scene, app, s, index_and_store.as_ref(), &store.records, none);
+    times.render = t.elapsed().as_secs_f64();
+    stats.render_rays = render_rays;
+    stats.total_caches = store.records.len();
+    stats.record_bytes = store.records.len() * app.record_bytes();
+    times.total = start.elapsed().as_secs_f64();
+    stats.times = times;
+    stats.peak_memory_bytes = peak_memory_bytes();
+    Ok(CachedOutput { image, stats, stage1, stage2, discontinuity })
+}
+
+/// Shades every sub-pixel sample (box filter over the pixel): from the caches, or by the reference.
+fn shade_image<A: Application>(
+    scene: &Scene,
+    app: &A,
+    s: &CacheSettings,
+    index: Option<&CacheIndex>,
+    records: &[A::Record],
+    reference: bool,
+) -> (Image, RayCounters) {
+    let b = scene.film.cropped_bounds();
+    let [w, h] = b.size();
+    let n = s.subpixels.max(1);
+    let pb = bar(s.progress, h as u64, if reference { "reference" } else { "render" });
+    let rows: Vec<(Vec<[f32; 3]>, RayCounters)> = (0..h)
+        .into_par_iter()
+        .map(|row| {
+            let mut out = vec![[0.0f32; 3]; w];
+            let mut rays = RayCounters::default();
+            let (mut near, mut weights, mut blend) = (Vec::new(), Vec::new(), Vec::new());
+            let y = b.min[1] + row as i32;
+            for (col, px) in out.iter_mut().enumerate() {
+                let x = b.min[0] + col as i32;
+                let mut sum = [0.0f32; 3];
+                for i in 0..n {
+                    let u = subpixel(x, y, i);
+                    rays.camera += 1;
+                    let Some(sp) = shading_point(scene, [x as f32 + u[0], y as f32 + u[1]]) else { continue };
+                    let mut rng =
+                        Rng::keyed(s.seed, STAGE_SHADE, ((y as u32 as u64) << 32 | x as u32 as u64) * 64 + i as u64);
+                    let v = if reference {
+                        app.reference(scene, &sp, &mut rng, &mut rays)
+                    } else if let Some(index) = index {
+                        index.select(sp.p, sp.n, &mut near);
+                        index.interpolate_weights(&near, &mut weights);
+                        blend.clear();
+                        blend.extend(weights.iter().map(|&(id, wt)| (&records[id as usize], wt)));
+                        if blend.is_empty() { [0.0; 3] } else { app.shade(scene, &sp, &blend, &mut rng, &mut rays) }
+                    } else {
+                        [0.0; 3]
+                    };
+                    for k in 0..3 {
+                        sum[k] += v[k];
+                    }
+                }
+                *px = sum.map(|v| v / n as f32);
+            }
+            pb.inc(1);
+            (out, rays)
+        })
+        .collect();
+    pb.finish_and_clear();
+    let mut img = Image::new(w, h);
+    let mut rays = RayCounters::default();
+    for (y, (row, r)) in rows.into_iter().enumerate() {
+        for (x, c) in row.into_iter().enumerate() {
+            img.set(x, y, c);
+        }
+        rays.add(&r);
+    }
+    (img, rays)
+}
