@@ -1,0 +1,206 @@
+//! Behaviour of the `cacheao` integrator (issue 5): analytic answers, every placement converging, exact
+//! budgets, determinism, and bad or degenerate inputs giving a clear message or a sensible image.
+
+use std::path::Path;
+
+use cachert::Warnings;
+use cachert::image::Image;
+use cachert::render::{RenderOutput, RenderSettings, render};
+use cachert::scene::{LoadOptions, load_str};
+
+/// Every placement name, plus the per-sample reference.
+const PLACEMENTS: [&str; 9] = ["none", "im", "sd", "sd+as", "vgc", "vgc+dgs", "vgc+as", "vgc+dgs:diff", "vgc+dgs:geom"];
+
+fn run(scene: &str, set: &[(&str, &str)], threads: Option<usize>) -> cachert::Result<RenderOutput> {
+    let loaded = load_str(scene, Path::new("inline.pbrt"), LoadOptions::default())?;
+    let settings = RenderSettings {
+        set: set.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
+        threads,
+        seed: 7,
+        ..Default::default()
+    };
+    render(&loaded.scene, loaded.integrator.as_ref(), &settings, &mut Warnings::default())
+}
+
+/// An orthographic camera looking down −z at the square [−4, 4]², 64×64 pixels, over `world`.
+fn top_view(world: &str) -> String {
+    format!(
+        "LookAt 0 0 10  0 0 0  0 1 0\nCamera \"orthographic\" \"float screenwindow\" [-4 4 -4 4]\n\
+         Film \"image\" \"integer xresolution\" 64 \"integer yresolution\" 64\n\
+         Integrator \"cacheao\" \"float maxdistance\" 1e30\nWorldBegin\n{world}\nWorldEnd\n"
+    )
+}
+
+const PLANE: &str = "Shape \"trianglemesh\" \"point P\" [-100 -100 0  100 -100 0  100 100 0  -100 100 0] \"integer indices\" [0 1 2 0 2 3]";
+const SPHERE_CENTRE: [f64; 3] = [0.5, -0.3, 1.5];
+
+/// The plane point seen by pixel (x, y) of [`top_view`]: pbrt's camera is left-handed, so raster x runs
+/// along world −x when looking down −z with +y up.
+fn plane_point(x: usize, y: usize) -> [f64; 2] {
+    let sx = -4.0 + (x as f64 + 0.5) / 64.0 * 8.0;
+    let sy = 4.0 - (y as f64 + 0.5) / 64.0 * 8.0;
+    [-sx, sy]
+}
+
+/// Closed-form normalised AO on the plane under a unit sphere: 1 − (r/d)²·cos θ (the cosine-weighted
+/// fraction of the hemisphere a fully visible sphere covers), or `None` near the sphere's own footprint.
+fn sphere_ao(x: usize, y: usize) -> Option<f64> {
+    let [px, py] = plane_point(x, y);
+    let [cx, cy, cz] = SPHERE_CENTRE;
+    if (px - cx).hypot(py - cy) < 1.3 {
+        return None;
+    }
+    let d = ((cx - px).powi(2) + (cy - py).powi(2) + cz * cz).sqrt();
+    Some(1.0 - (1.0 / d).powi(2) * (cz / d))
+}
+
+fn rmse_to_closed_form(img: &Image) -> (f64, f64) {
+    let (mut sum, mut max, mut n) = (0.0, 0.0f64, 0);
+    for y in 0..64 {
+        for x in 0..64 {
+            if let Some(exact) = sphere_ao(x, y) {
+                let e = img.get(x, y)[0] as f64 - exact;
+                sum += e * e;
+                max = max.max(e.abs());
+                n += 1;
+            }
+        }
+    }
+    ((sum / n as f64).sqrt(), max)
+}
+
+fn sphere_scene() -> String {
+    let [x, y, z] = SPHERE_CENTRE;
+    top_view(&format!("{PLANE}\nTranslate {x} {y} {z}\nShape \"sphere\" \"float radius\" 1"))
+}
+
+#[test]
+fn an_unoccluded_plane_has_ao_one_for_every_placement() {
+    for p in PLACEMENTS {
+        let out = run(&top_view(PLANE), &[("placement", p), ("caches", "300")], None).unwrap();
+        for px in &out.image.pixels {
+            assert!((px[0] - 1.0).abs() < 1e-5, "{p}: {px:?}");
+        }
+    }
+}
+
+#[test]
+fn the_reference_meets_the_sphere_closed_form_within_its_discretisation() {
+    // The 32×32 equal-area gather integrates the cosine-weighted visibility exactly except in cells the
+    // sphere's outline crosses; each cell weighs cos θ_k / Σ cos ≤ 1/512 (Σ cos ≈ n²/2), and a handful of
+    // cells straddle the outline with errors of both signs: allow six cells' worth.
+    let out = run(&sphere_scene(), &[("placement", "none")], None).unwrap();
+    let (rmse, max) = rmse_to_closed_form(&out.image);
+    assert!(max < 6.0 / 512.0, "max error {max}, rmse {rmse}");
+}
+
+#[test]
+fn every_placement_approaches_the_closed_form_as_caches_grow() {
+    for p in &PLACEMENTS[1..] {
+        let errs: Vec<f64> = ["100", "400", "1600"]
+            .iter()
+            .map(|c| {
+                rmse_to_closed_form(&run(&sphere_scene(), &[("placement", p), ("caches", c)], None).unwrap().image).0
+            })
+            .collect();
+        assert!(errs[2] < errs[0], "{p}: {errs:?}");
+        assert!(errs[2] < 0.02, "{p}: {errs:?}");
+    }
+}
+
+#[test]
+fn budgets_are_exact_and_split_by_the_stage_two_share() {
+    for p in &PLACEMENTS[1..] {
+        let out = run(&sphere_scene(), &[("placement", p), ("caches", "500")], None).unwrap();
+        let c = out.cache.unwrap();
+        assert_eq!(c.stats.total_caches, 500, "{p}");
+        let mut sites: Vec<u32> = c.stage1.iter().chain(&c.stage2).copied().collect();
+        sites.sort_unstable();
+        sites.dedup();
+        assert_eq!(sites.len(), 500, "{p}: two caches on one pixel");
+        let two_stage = p.contains('+');
+        assert_eq!(c.stage2.len(), if two_stage { 75 } else { 0 }, "{p}");
+    }
+}
+
+#[test]
+fn same_seed_same_image_at_one_and_two_threads() {
+    for p in ["im", "sd+as", "vgc+dgs"] {
+        let a = run(&sphere_scene(), &[("placement", p), ("caches", "200")], Some(1)).unwrap();
+        let b = run(&sphere_scene(), &[("placement", p), ("caches", "200")], Some(2)).unwrap();
+        assert_eq!(a.image, b.image, "{p}");
+        let (ca, cb) = (a.cache.unwrap(), b.cache.unwrap());
+        assert_eq!((ca.stage1, ca.stage2), (cb.stage1, cb.stage2), "{p}");
+    }
+}
+
+#[test]
+fn a_budget_of_zero_is_an_error_and_one_cache_renders() {
+    let e = run(&sphere_scene(), &[("placement", "vgc+dgs"), ("caches", "0")], None).unwrap_err().to_string();
+    assert!(e.contains("\"caches\" must be at least 1"), "{e}");
+    for p in &PLACEMENTS[1..] {
+        match run(&sphere_scene(), &[("placement", p), ("caches", "1")], None) {
+            Ok(out) => assert_eq!(out.cache.unwrap().stats.total_caches, 1, "{p}"),
+            // VGC cannot meet a budget that its angular threshold alone exceeds: it must say so.
+            Err(e) => {
+                let e = e.to_string();
+                assert!(p.starts_with("vgc") && e.contains("σ_a") && e.contains("budget of 1"), "{p}: {e}");
+            }
+        }
+    }
+}
+
+#[test]
+fn more_caches_than_pixels_caches_every_pixel_with_a_note() {
+    let scene = top_view(PLANE)
+        .replace("xresolution\" 64 \"integer yresolution\" 64", "xresolution\" 8 \"integer yresolution\" 8");
+    for p in &PLACEMENTS[1..] {
+        let out = run(&scene, &[("placement", p), ("caches", "1000")], None).unwrap();
+        let c = out.cache.unwrap();
+        assert_eq!(c.stats.total_caches, 64, "{p}");
+        assert!(c.stats.notes.iter().any(|n| n.contains("every valid pixel")), "{p}: {:?}", c.stats.notes);
+    }
+}
+
+#[test]
+fn an_all_sky_image_is_black_with_a_note() {
+    let scene = top_view("Translate 0 0 -100\nShape \"sphere\" \"float radius\" 0.01")
+        .replace("0 0 10  0 0 0  0 1 0", "0 0 10  0 0 20  0 1 0");
+    for p in PLACEMENTS {
+        let out = run(&scene, &[("placement", p)], None).unwrap();
+        assert!(out.image.pixels.iter().all(|px| *px == [0.0; 3]), "{p}");
+        let c = out.cache.unwrap();
+        assert_eq!(c.stats.valid_pixels, 0);
+        assert!(c.stats.notes.iter().any(|n| n.contains("no pixel")), "{p}");
+    }
+}
+
+#[test]
+fn a_tiny_sigma_a_names_itself_and_the_budget() {
+    let e = run(&sphere_scene(), &[("placement", "vgc"), ("caches", "20"), ("sigma_a", "0.001")], None)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("0.001") && e.contains("20"), "{e}");
+}
+
+#[test]
+fn coincident_shading_points_from_instances_do_not_break_placement() {
+    // The same object instanced twice at the same place: every pixel's shading point appears twice in the
+    // scene, and large flat regions give many identical normals.
+    let world = format!(
+        "ObjectBegin \"p\"\n{PLANE}\nShape \"sphere\" \"float radius\" 1\nObjectEnd\nObjectInstance \"p\"\nObjectInstance \"p\""
+    );
+    for p in &PLACEMENTS[1..] {
+        let out = run(&top_view(&world), &[("placement", p), ("caches", "300")], None).unwrap();
+        assert_eq!(out.cache.unwrap().stats.total_caches, 300, "{p}");
+        assert!(out.image.pixels.iter().all(|px| px[0].is_finite()), "{p}");
+    }
+}
+
+#[test]
+fn unknown_placements_and_parameters_are_errors_listing_the_valid_ones() {
+    let e = run(&sphere_scene(), &[("placement", "vgc+foo")], None).unwrap_err().to_string();
+    assert!(e.contains("vgc+foo") && e.contains("vgc+dgs:geom") && e.contains("none"), "{e}");
+    let e = run(&sphere_scene(), &[("sdminsiz", "3")], None).unwrap_err().to_string();
+    assert!(e.contains("sdminsiz") && e.contains("sdminsize"), "{e}");
+}
