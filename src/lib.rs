@@ -19,6 +19,7 @@ pub mod application;
 pub mod cache;
 pub mod cli;
 pub mod error;
+pub mod experiment;
 pub mod gbuffer;
 pub mod image;
 pub mod metrics;

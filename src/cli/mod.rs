@@ -4,6 +4,7 @@
 pub mod bench;
 pub mod cache_outputs;
 pub mod compare;
+pub mod experiment;
 pub mod info;
 pub mod render;
 
@@ -27,6 +28,8 @@ pub enum Command {
     Compare(compare::CompareArgs),
     /// Time the pbrt-v3 reference scenes against pbrt-v3's own CPU times.
     Bench(bench::BenchArgs),
+    /// Sweep placements × budgets × seeds against the per-sample reference (RMSE, HDR-FLIP).
+    Experiment(experiment::ExperimentArgs),
 }
 
 /// Runs a parsed command line; returns what to print on stdout.
@@ -36,5 +39,6 @@ pub fn run(cli: &Cli) -> crate::Result<String> {
         Command::Info(a) => info::run(a),
         Command::Compare(a) => compare::run(a),
         Command::Bench(a) => bench::run(a),
+        Command::Experiment(a) => experiment::run(a),
     }
 }

@@ -65,7 +65,7 @@ fn parse_key_value(s: &str) -> std::result::Result<(String, String), String> {
 
 /// Runs `cachert render`; returns the summary to print (empty with --quiet) and the warnings, already printed.
 pub fn run(args: &RenderArgs) -> Result<String> {
-    let loaded = load(&args.scene, LoadOptions { quick: args.quick })?;
+    let loaded = load(&args.scene, LoadOptions { quick: args.quick, ..Default::default() })?;
     let mut warnings = loaded.warnings.clone();
     let settings = RenderSettings {
         seed: args.seed,

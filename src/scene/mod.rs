@@ -33,6 +33,8 @@ use crate::parse::Named;
 pub struct LoadOptions {
     /// pbrt-v3's `--quick`: film resolution ÷ 4 and one sample per pixel.
     pub quick: bool,
+    /// Film resolution instead of the scene's (the camera's screen window follows the new aspect ratio).
+    pub resolution: Option<[u32; 2]>,
 }
 
 /// What loading took and produced.

@@ -249,6 +249,11 @@ impl SceneBuilder {
     }
 
     fn finish(mut self, source: &Path, stats: &mut LoadStats) -> Result<LoadedScene> {
+        if let Some(r) = self.opts.resolution {
+            let loc = self.film_loc.clone().unwrap_or_else(|| SourceLoc::new(source.into(), 1, 1));
+            crate::scene::film::check_memory(r, &loc)?;
+            self.film.resolution = r;
+        }
         let camera = match self.camera.take() {
             Some((named, world_from_camera, _)) => {
                 let c = Camera::from_directive(&named, &world_from_camera, &self.film, &mut self.warnings)?;

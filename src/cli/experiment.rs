@@ -1,0 +1,77 @@
+//! `cachert experiment`: a placement sweep (scenes × budgets × placements × seeds) against the per-sample
+//! reference, written to CSV/JSON with a table of averages.
+
+use std::path::PathBuf;
+
+use crate::error::{Error, Result};
+use crate::experiment::{Sweep, run as run_sweep};
+
+/// Flags of `cachert experiment`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ExperimentArgs {
+    /// Scene files (repeatable).
+    #[arg(long = "scene", required = true)]
+    pub scenes: Vec<PathBuf>,
+    /// Film resolution WxH for every scene (e.g. 640x360).
+    #[arg(long)]
+    pub resolution: Option<String>,
+    /// Cache budgets, comma-separated.
+    #[arg(long, default_value = "13000")]
+    pub caches: String,
+    /// Placements, comma-separated.
+    #[arg(long, default_value = "im,sd,sd+as,vgc,vgc+dgs")]
+    pub placements: String,
+    /// Number of seeds (0, 1, …) averaged per setting.
+    #[arg(long, default_value_t = 3)]
+    pub seeds: u64,
+    /// cacheao parameter for every run (repeatable), e.g. --set maxdistance=0.6.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Output folder (reference images are kept there and reused).
+    #[arg(long, default_value = "experiment-out")]
+    pub out: PathBuf,
+    /// Worker threads.
+    #[arg(long)]
+    pub nthreads: Option<usize>,
+}
+
+/// Runs the sweep and returns the table.
+pub fn run(a: &ExperimentArgs) -> Result<String> {
+    let resolution = match &a.resolution {
+        Some(r) => {
+            let (w, h) = r.split_once('x').ok_or_else(|| Error::usage(format!("--resolution {r}: expected WxH")))?;
+            let p = |v: &str| v.trim().parse::<u32>().ok().filter(|&v| v > 0);
+            match (p(w), p(h)) {
+                (Some(w), Some(h)) => Some([w, h]),
+                _ => return Err(Error::usage(format!("--resolution {r}: expected WxH with positive integers"))),
+            }
+        }
+        None => None,
+    };
+    let caches = a
+        .caches
+        .split(',')
+        .map(|c| c.trim().parse::<usize>().map_err(|_| Error::usage(format!("--caches: \"{c}\" is not a count"))))
+        .collect::<Result<Vec<_>>>()?;
+    let set = a
+        .set
+        .iter()
+        .map(|kv| {
+            kv.split_once('=')
+                .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
+                .ok_or_else(|| Error::usage(format!("--set {kv}: expected KEY=VALUE")))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let sweep = Sweep {
+        scenes: a.scenes.clone(),
+        resolution,
+        caches,
+        placements: a.placements.split(',').map(|s| s.trim().to_string()).collect(),
+        seeds: a.seeds.max(1),
+        set,
+        out: a.out.clone(),
+        threads: a.nthreads,
+    };
+    let (_, table) = run_sweep(&sweep, &mut |line| eprintln!("{line}"))?;
+    Ok(format!("{table}\nresults: {}/results.csv, results.json", a.out.display()))
+}

@@ -1,0 +1,198 @@
+//! Experiments: sweeps over scenes × cache budgets × placements × seeds, each render compared with the
+//! per-sample reference by RMSE and HDR-FLIP; results go to CSV and JSON (charts and the HTML report are
+//! built from these files, never from logs) and a table of averages over seeds.
+//!
+//! Depends on `scene`, `render`, `image` and `metrics`; nothing depends on it.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use crate::error::{Error, Result, Warnings};
+use crate::image::Image;
+use crate::metrics::{Metric, compare};
+use crate::render::{RenderSettings, render};
+use crate::scene::{LoadOptions, LoadedScene, load};
+
+/// One sweep.
+#[derive(Clone, Debug)]
+pub struct Sweep {
+    /// Scene files.
+    pub scenes: Vec<PathBuf>,
+    /// Film resolution for every scene.
+    pub resolution: Option<[u32; 2]>,
+    /// Cache budgets.
+    pub caches: Vec<usize>,
+    /// Placement names.
+    pub placements: Vec<String>,
+    /// Seeds 0..seeds.
+    pub seeds: u64,
+    /// Extra `cacheao` parameters for every run (e.g. maxdistance).
+    pub set: Vec<(String, String)>,
+    /// Output folder.
+    pub out: PathBuf,
+    /// Worker threads.
+    pub threads: Option<usize>,
+}
+
+/// One measured run.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    /// Scene file stem.
+    pub scene: String,
+    /// Placement.
+    pub placement: String,
+    /// Budget.
+    pub caches: usize,
+    /// Seed.
+    pub seed: u64,
+    /// RMSE against the reference.
+    pub rmse: f64,
+    /// Mean HDR-FLIP against the reference.
+    pub flip: f64,
+    /// Stage times and counts of the run.
+    pub stats: crate::render::cache_stats::CacheStats,
+}
+
+fn name_of(p: &Path) -> String {
+    let dir = p.parent().and_then(|d| d.file_name()).map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let stem = p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    if dir.is_empty() { stem } else { format!("{dir}-{stem}") }
+}
+
+fn run_one(
+    l: &LoadedScene,
+    sweep: &Sweep,
+    placement: &str,
+    caches: usize,
+    seed: u64,
+) -> Result<(Image, crate::render::cached::CachedOutput)> {
+    let mut set = sweep.set.clone();
+    set.push(("placement".into(), placement.into()));
+    set.push(("caches".into(), caches.to_string()));
+    let settings =
+        RenderSettings { seed, threads: sweep.threads, integrator: Some("cacheao".into()), set, ..Default::default() };
+    let out = render(&l.scene, l.integrator.as_ref(), &settings, &mut Warnings::default())?;
+    let cache = out.cache.ok_or_else(|| Error::usage("experiment: cacheao produced no cache report"))?;
+    Ok((out.image, *cache))
+}
+
+/// Runs the sweep; returns all rows (also written to `out/results.{csv,json}`) and the summary table.
+pub fn run(sweep: &Sweep, log: &mut dyn FnMut(&str)) -> Result<(Vec<Row>, String)> {
+    std::fs::create_dir_all(&sweep.out).map_err(|e| Error::file(&sweep.out, format!("cannot create: {e}")))?;
+    let mut rows = Vec::new();
+    for path in &sweep.scenes {
+        let name = name_of(path);
+        let l = load(path, LoadOptions { resolution: sweep.resolution, ..Default::default() })?;
+        let ref_path = sweep.out.join(format!("{name}-reference.exr"));
+        let reference = match crate::image::read(&ref_path) {
+            Ok(img) if [img.width, img.height] == l.scene.film.cropped_bounds().size() => img,
+            _ => {
+                let (img, c) = run_one(&l, sweep, "none", 1, 0)?;
+                log(&format!("{name}: reference in {:.1} s", c.stats.times.total));
+                crate::image::write(&img, &ref_path)?;
+                img
+            }
+        };
+        for &caches in &sweep.caches {
+            for placement in &sweep.placements {
+                for seed in 0..sweep.seeds {
+                    let (img, c) = run_one(&l, sweep, placement, caches, seed)?;
+                    let m = compare(&img, &reference, &[Metric::Rmse, Metric::Flip])?;
+                    let (rmse, flip) = (m[0].1, m[1].1);
+                    log(&format!(
+                        "{name} {placement} {caches} seed {seed}: rmse {rmse:.5} flip {flip:.5} ({:.1} s)",
+                        c.stats.times.total
+                    ));
+                    if seed == 0 {
+                        crate::image::write(
+                            &img,
+                            &sweep.out.join(format!("{name}-{}-{caches}.exr", placement.replace([':', '+'], "_"))),
+                        )?;
+                    }
+                    rows.push(Row {
+                        scene: name.clone(),
+                        placement: placement.clone(),
+                        caches,
+                        seed,
+                        rmse,
+                        flip,
+                        stats: c.stats,
+                    });
+                }
+            }
+        }
+    }
+    write_results(&rows, &sweep.out)?;
+    Ok((rows.clone(), table(&rows, sweep)))
+}
+
+fn write_results(rows: &[Row], out: &Path) -> Result<()> {
+    let mut csv = String::from(
+        "scene,placement,caches,seed,rmse,flip,total_s,shading_points_s,initial_gen_s,initial_comp_s,adaptive_gen_s,adaptive_comp_s,kd_tree_s,render_s,stage1,stage2\n",
+    );
+    for r in rows {
+        let t = &r.stats.times;
+        let _ = writeln!(
+            csv,
+            "{},{},{},{},{:.6},{:.6},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{}",
+            r.scene,
+            r.placement,
+            r.caches,
+            r.seed,
+            r.rmse,
+            r.flip,
+            t.total,
+            t.shading_points,
+            t.initial_generation,
+            t.initial_computation,
+            t.adaptive_generation,
+            t.adaptive_computation,
+            t.kd_tree,
+            t.render,
+            r.stats.stage1_caches,
+            r.stats.stage2_caches
+        );
+    }
+    let json =
+        serde_json::to_string_pretty(rows).map_err(|e| Error::file(out, format!("cannot encode results: {e}")))?;
+    for (file, text) in [("results.csv", csv), ("results.json", json)] {
+        let p = out.join(file);
+        std::fs::write(&p, text).map_err(|e| Error::file(&p, format!("cannot write: {e}")))?;
+    }
+    Ok(())
+}
+
+/// Markdown table: per scene and budget, each placement's RMSE and FLIP averaged over seeds.
+fn table(rows: &[Row], sweep: &Sweep) -> String {
+    let mut t = String::new();
+    let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
+    scenes.dedup();
+    for scene in scenes {
+        for &caches in &sweep.caches {
+            let _ = writeln!(
+                t,
+                "\n{scene}, {caches} caches (mean over {} seeds)\n\n| placement | RMSE | HDR-FLIP | total s |\n|---|---|---|---|",
+                sweep.seeds
+            );
+            for p in &sweep.placements {
+                let sel: Vec<&Row> =
+                    rows.iter().filter(|r| r.scene == scene && r.caches == caches && &r.placement == p).collect();
+                if sel.is_empty() {
+                    continue;
+                }
+                let n = sel.len() as f64;
+                let mean = |f: &dyn Fn(&Row) -> f64| sel.iter().map(|r| f(r)).sum::<f64>() / n;
+                let _ = writeln!(
+                    t,
+                    "| {p} | {:.5} | {:.5} | {:.2} |",
+                    mean(&|r| r.rmse),
+                    mean(&|r| r.flip),
+                    mean(&|r| r.stats.times.total)
+                );
+            }
+        }
+    }
+    t
+}
