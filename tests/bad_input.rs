@@ -55,7 +55,7 @@ fn load_ok(path: &Path) -> LoadedScene {
 fn missing_scene_file() {
     let dir = TempDir::new("missing-scene");
     let path = dir.path("nope.pbrt");
-    let err = load(&path, LoadOptions::default()).err().expect("a missing file is an error");
+    let err = load(&path, LoadOptions::default()).expect_err("a missing file is an error");
     assert_eq!(
         err.to_string(),
         format!("{}: cannot read scene file: No such file or directory (os error 2)", path.display())
