@@ -178,6 +178,22 @@ fn indices_not_a_multiple_of_3() {
     assert_world_error("index-count", body, 6, 52, "parameter \"indices\": 4 values is not a multiple of 3");
 }
 
+#[test]
+fn empty_triangle_mesh_is_a_warning() {
+    // pbrt-v3 draws nothing and says nothing; cachert draws nothing and says so.
+    let dir = TempDir::new("empty-mesh");
+    let path =
+        dir.write("scene.pbrt", world("Shape \"trianglemesh\" \"point P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" []"));
+    let warnings: Vec<String> = load_ok(&path).warnings.iter().map(|w| w.to_string()).collect();
+    assert_eq!(
+        warnings,
+        vec![format!(
+            "{}:6:52: warning: trianglemesh with 3 vertices and no triangles: nothing is drawn",
+            path.display()
+        )]
+    );
+}
+
 // ---- directives and structure ----
 
 #[test]
