@@ -201,6 +201,21 @@ impl<'t> Parser<'t, '_> {
             }
             return Ok(v);
         }
+        // A bare word that is no directive where a number belongs ("nan", "inf", "1e"): point at it.
+        if let Some(Token { tok: Tok::Word(w), offset, .. }) = stop
+            && v.len() < n
+            && !DIRECTIVES.iter().any(|(d, _)| d == w)
+        {
+            let lower = w.to_ascii_lowercase();
+            let hint = if ["nan", "inf", "infinity"].contains(&lower.trim_start_matches(['-', '+'])) {
+                " (values must be finite numbers)"
+            } else {
+                ""
+            };
+            let msg = format!("{kw}: expected {n} numbers, found {w}{hint}");
+            let offset = *offset;
+            return Err(Error::at(&self.loc(offset), msg));
+        }
         // Name the token that stopped the list when it is not simply the next directive.
         let odd_stop = match stop.map(|t| &t.tok) {
             None | Some(Tok::Word(_)) => bracketed,

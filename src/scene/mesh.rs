@@ -100,6 +100,11 @@ pub fn trianglemesh_params(params: &ParamList, loc: &SourceLoc, warnings: &mut W
         None if nv == 3 => vec![0, 1, 2],
         None => return Err(Error::at(loc, "trianglemesh: missing required parameter \"integer indices\"")),
     };
+    if indices.is_empty() {
+        // pbrt-v3 accepts this silently; say that nothing will be drawn.
+        let at = at(if params.loc_of("indices").is_some() { "indices" } else { "P" });
+        warnings.at(&at, format!("trianglemesh with {nv} vertices and no triangles: nothing is drawn"));
+    }
     let mut uvs: Vec<[f32; 2]> = match params.point2s("uv")? {
         Some(v) => v,
         None => params.point2s("st")?.unwrap_or_default(),

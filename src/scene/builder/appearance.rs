@@ -117,16 +117,14 @@ impl SceneBuilder {
                     &schema,
                     &mut props,
                 )?;
-                if let Some(Prop::Str(file)) = props.get("filename") {
-                    if !std::path::Path::new(file).is_file() {
-                        let floc = class.params.loc_of("filename").unwrap_or(&class.name_loc);
-                        self.warnings.at(
-                            floc,
-                            format!("texture \"{name}\": cannot read image \"{file}\"; using the constant 1"),
-                        );
-                        props = Props::default();
-                        class_name = "constant".into();
-                    }
+                if let Some(Prop::Str(file)) = props.get("filename")
+                    && !std::path::Path::new(file).is_file()
+                {
+                    let floc = class.params.loc_of("filename").unwrap_or(&class.name_loc);
+                    self.warnings
+                        .at(floc, format!("texture \"{name}\": cannot read image \"{file}\"; using the constant 1"));
+                    props = Props::default();
+                    class_name = "constant".into();
                 }
             }
             None => {

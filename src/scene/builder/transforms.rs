@@ -73,10 +73,8 @@ impl SceneBuilder {
                     ActiveTransform::All => [true, true],
                 };
             }
-            DirectiveKind::TransformTimes(a, b) => {
-                if !(a.is_finite() && b.is_finite()) {
-                    return Err(Error::at(loc, "TransformTimes: times must be finite"));
-                }
+            DirectiveKind::TransformTimes(a, b) if !(a.is_finite() && b.is_finite()) => {
+                return Err(Error::at(loc, "TransformTimes: times must be finite"));
             }
             _ => {}
         }

@@ -1,0 +1,111 @@
+//! Helpers shared by the behaviour tests: scratch folders, small scene texts, the third-party scene folder
+//! and one-call load-and-render.
+#![allow(dead_code)] // each test binary uses its own subset
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use cachert::Warnings;
+use cachert::image::Image;
+use cachert::render::{RenderOutput, RenderSettings, render};
+use cachert::scene::{LoadOptions, LoadedScene, load, load_str};
+
+/// A fresh folder under the system temp dir, unique per process and call, removed when dropped.
+pub struct TempDir(pub PathBuf);
+
+impl TempDir {
+    /// Makes `cachert-<tag>-<pid>-<n>` under `std::env::temp_dir()`.
+    pub fn new(tag: &str) -> Self {
+        static COUNT: AtomicUsize = AtomicUsize::new(0);
+        let n = COUNT.fetch_add(1, Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("cachert-{tag}-{}-{n}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("the temp dir is writable");
+        TempDir(dir)
+    }
+
+    /// `name` inside the folder.
+    pub fn path(&self, name: &str) -> PathBuf {
+        self.0.join(name)
+    }
+
+    /// Writes `contents` to `name` (folders made as needed) and returns its path.
+    pub fn write(&self, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
+        let path = self.0.join(name);
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent).expect("the temp dir is writable");
+        }
+        std::fs::write(&path, contents).expect("the temp dir is writable");
+        path
+    }
+
+    /// The names in the folder, sorted (hidden temporary files included).
+    pub fn entries(&self) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(&self.0)
+            .expect("the temp dir exists")
+            .map(|e| e.expect("readable entry").file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Render options for a tiny test image: `res`×`res` pixels, `spp` random-sampler samples, box filter,
+/// pbrt-v3 `ambientocclusion` with `nsamples` rays.
+pub fn header(res: u32, spp: u32, nsamples: u32) -> String {
+    format!(
+        "Film \"image\" \"integer xresolution\" [{res}] \"integer yresolution\" [{res}]\n\
+         Sampler \"random\" \"integer pixelsamples\" [{spp}]\n\
+         PixelFilter \"box\"\n\
+         Integrator \"ambientocclusion\" \"integer nsamples\" [{nsamples}]\n"
+    )
+}
+
+/// The third-party scenes folder next to the repository (`../shared/scenes`), or `None` with a printed
+/// reason when it is not there.
+pub fn shared_scenes() -> Option<PathBuf> {
+    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/scenes"));
+    if dir.is_dir() {
+        Some(dir.to_path_buf())
+    } else {
+        eprintln!("skipped: {} is absent (third-party scenes and pbrt-v3 references live there)", dir.display());
+        None
+    }
+}
+
+/// Settings with a seed and everything else at its default.
+pub fn settings(seed: u64) -> RenderSettings {
+    RenderSettings { seed, ..Default::default() }
+}
+
+/// Loads scene text (as the file `name`) and renders it with `s`; panics with the error text on failure.
+pub fn render_text(text: &str, name: &str, s: &RenderSettings) -> (RenderOutput, LoadedScene) {
+    let loaded = load_str(text, Path::new(name), LoadOptions::default()).unwrap_or_else(|e| panic!("load: {e}"));
+    let out = render_loaded(&loaded, s).unwrap_or_else(|e| panic!("render: {e}"));
+    (out, loaded)
+}
+
+/// Renders a loaded scene with `s`, collecting warnings into the loaded scene's list.
+pub fn render_loaded(loaded: &LoadedScene, s: &RenderSettings) -> cachert::Result<RenderOutput> {
+    let mut w: Warnings = loaded.warnings.clone();
+    render(&loaded.scene, loaded.integrator.as_ref(), s, &mut w)
+}
+
+/// Loads the scene file at `path` and renders it.
+pub fn render_file(path: &Path, opts: LoadOptions, s: &RenderSettings) -> cachert::Result<(RenderOutput, LoadedScene)> {
+    let loaded = load(path, opts)?;
+    let out = render_loaded(&loaded, s)?;
+    Ok((out, loaded))
+}
+
+/// Mean of the three channels over all pixels.
+pub fn mean(im: &Image) -> f64 {
+    let m = im.mean();
+    (m[0] + m[1] + m[2]) / 3.0
+}
