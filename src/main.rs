@@ -1,6 +1,7 @@
 //! The `cachert` command: parses flags, runs the library, prints the result. Every failure prints
 //! `error: file:line:col: …` (with the offending line and a caret when there is one) and exits with status 2.
 
+use std::io::Write;
 use std::process::ExitCode;
 
 use clap::Parser;
@@ -10,7 +11,14 @@ fn main() -> ExitCode {
     match cachert::cli::run(&cli) {
         Ok(out) => {
             if !out.is_empty() {
-                println!("{}", out.trim_end());
+                // A closed pipe (`cachert compare … | head -1`) is not an error of ours.
+                let mut stdout = std::io::stdout().lock();
+                if let Err(e) = writeln!(stdout, "{}", out.trim_end())
+                    && e.kind() != std::io::ErrorKind::BrokenPipe
+                {
+                    eprintln!("error: cannot write to standard output: {e}");
+                    return ExitCode::from(2);
+                }
             }
             ExitCode::SUCCESS
         }

@@ -81,7 +81,7 @@ fn quick_ao(path: &Path) -> cachert::Result<(cachert::render::RenderOutput, cach
         threads: Some(1),
         ..Default::default()
     };
-    render_file(path, LoadOptions { quick: true }, &s)
+    render_file(path, LoadOptions { quick: true, ..Default::default() }, &s)
 }
 
 fn assert_sane(name: &str, im: &image::Image) {

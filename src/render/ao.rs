@@ -52,7 +52,7 @@ impl AmbientOcclusion {
             )));
         }
         let max_distance = p.float_or("maxdistance", f64::INFINITY)? as f32;
-        if !(max_distance > 0.0) {
+        if max_distance.is_nan() || max_distance <= 0.0 {
             let loc = p.at("maxdistance");
             return Err(Error::usage(format!(
                 "{loc}ambientocclusion: \"maxdistance\" must be positive, got {max_distance}"

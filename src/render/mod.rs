@@ -102,7 +102,7 @@ pub fn render(
     if name == "cacheao" {
         let (app, cs) = cacheao::settings(&iparams, scene, settings.seed, settings.progress)?;
         iparams.check_overrides(name)?;
-        report_unused(integrator, name, warnings);
+        report_unused(integrator, name, &settings.set, warnings);
         let run = || cached::render_cached(scene, &app, &cs);
         let out = with_threads(settings.threads, run)??;
         let mut rays = out.stats.cache_rays;
@@ -126,7 +126,7 @@ pub fn render(
         }
     };
     iparams.check_overrides(name)?;
-    report_unused(integrator, name, warnings);
+    report_unused(integrator, name, &settings.set, warnings);
     let run = || render_image(scene, &sampler, pixel.as_ref(), settings.seed, settings.progress);
     let (image, rays, render_secs) = with_threads(settings.threads, run)?;
     Ok(RenderOutput { image, rays, render_secs, spp: sampler.spp, integrator: name.to_string(), cache: None })
@@ -147,10 +147,11 @@ fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -
 }
 
 /// Warns about Integrator parameters that the integrator did not read.
-fn report_unused(integrator: Option<&Named>, name: &str, warnings: &mut Warnings) {
+fn report_unused(integrator: Option<&Named>, name: &str, set: &[(String, String)], warnings: &mut Warnings) {
     if let Some(n) = integrator.filter(|n| n.name == name) {
         for p in n.params.unused() {
-            if p.name != "pixelbounds" {
+            // A parameter replaced by --set was not read because the command line won, not because it is unknown.
+            if p.name != "pixelbounds" && !set.iter().any(|(k, _)| *k == p.name) {
                 warnings.at(&p.loc, format!("Integrator: unused parameter \"{} {}\"", p.ty.word(), p.name));
             }
         }

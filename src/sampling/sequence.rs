@@ -96,7 +96,7 @@ mod tests {
             let pts: Vec<[f32; 2]> = (0..16).map(|i| sobol02(i, scramble)).collect();
             for kx in 0..=4 {
                 let (nx, ny) = (1usize << kx, 1usize << (4 - kx));
-                let mut seen = vec![false; 16];
+                let mut seen = [false; 16];
                 for p in &pts {
                     let c = (p[0] * nx as f32) as usize + nx * (p[1] * ny as f32) as usize;
                     assert!(!seen[c], "cell hit twice for {nx}x{ny}");

@@ -81,7 +81,7 @@ impl Camera {
             "perspective" | "orthographic" => {
                 let lr = p.float_or("lensradius", 0.0)? as f32;
                 let fd = p.float_or("focaldistance", 1e6)? as f32;
-                if !(lr >= 0.0 && lr.is_finite()) || !(fd > 0.0 && fd.is_finite()) {
+                if !(lr >= 0.0 && lr.is_finite() && fd > 0.0 && fd.is_finite()) {
                     return Err(Error::at(
                         &d.name_loc,
                         format!("lensradius {lr} / focaldistance {fd}: need lensradius ≥ 0 and focaldistance > 0"),

@@ -28,7 +28,10 @@ impl Transform {
             return Err("the matrix has a non-finite (NaN or infinite) entry".into());
         }
         let det = m.determinant();
-        if det == 0.0 || !det.is_finite() {
+        if !det.is_finite() {
+            return Err("the matrix's values are too large (its determinant overflows)".into());
+        }
+        if det == 0.0 {
             return Err("the matrix is singular (not invertible)".into());
         }
         let inv = m.inverse();
