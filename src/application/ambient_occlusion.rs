@@ -14,6 +14,7 @@ use crate::gbuffer::ShadingPoint;
 use crate::sampling::warp::equal_area_hemisphere;
 use crate::sampling::{Frame, Rng};
 use crate::scene::Scene;
+use crate::scene::accel::OccluderHint;
 use crate::scene::ray::{Ray, RayCounters, offset_ray_origin};
 
 use super::Application;
@@ -39,6 +40,8 @@ pub struct CacheAo {
 impl CacheAo {
     /// Gathers along an `n`×`n` grid (n = 32 in the paper: 1024 rays), rays of length `max_distance`.
     pub fn new(n: usize, max_distance: f32) -> Self {
+        // Index k = j·n + i is cell (i, j) (ALGORITHMS.md §3.3); rays are traced in serpentine order so
+        // consecutive ones are neighbours and often share a blocker (see OccluderHint).
         let dirs: Vec<Vec3A> = (0..n * n)
             .map(|k| equal_area_hemisphere([((k % n) as f32 + 0.5) / n as f32, ((k / n) as f32 + 0.5) / n as f32]))
             .collect();
@@ -55,17 +58,19 @@ impl CacheAo {
         let frame = Frame::generic(at.n);
         let mut mask = vec![0u64; self.dirs.len().div_ceil(64)].into_boxed_slice();
         let mut unoccluded = 0.0f32;
-        for (k, local) in self.dirs.iter().enumerate() {
+        let mut hint = OccluderHint::default();
+        let n = (self.dirs.len() as f64).sqrt() as usize;
+        for step in 0..self.dirs.len() {
+            let (i, j) = (step % n, step / n);
+            let k = j * n + if j % 2 == 0 { i } else { n - 1 - i };
+            let local = &self.dirs[k];
             let w = frame.to_world(*local);
             if w.dot(at.ng) <= 0.0 {
                 continue;
             }
             let ray = Ray { o: offset_ray_origin(at.p, at.p_error, at.ng, w), d: w, t_max: self.max_distance };
             rays.shadow += 1;
-            let blocked = match at.origin {
-                Some(o) => scene.geometry.occluded_from(&ray, o),
-                None => scene.geometry.occluded(&ray),
-            };
+            let blocked = scene.geometry.occluded_hinted(&ray, at.origin, &mut hint);
             if !blocked {
                 mask[k / 64] |= 1 << (k % 64);
                 unoccluded += local.z;

@@ -11,6 +11,7 @@ use crate::error::{Error, Result};
 use crate::sampling::Frame;
 use crate::sampling::warp::{UNIFORM_HEMISPHERE_PDF, cosine_hemisphere, cosine_hemisphere_pdf, uniform_hemisphere};
 use crate::scene::Scene;
+use crate::scene::accel::OccluderHint;
 use crate::scene::ray::Ray;
 use crate::scene::sampler::SamplerSpec;
 
@@ -76,6 +77,7 @@ impl AmbientOcclusion {
         let frame = Frame::from_normal(n);
         let inv_n = 1.0 / u.len() as f32;
         let mut l = 0.0;
+        let mut hint = OccluderHint::default();
         for &ui in u {
             let (wl, pdf) = if self.cos_sample {
                 let w = cosine_hemisphere(ui);
@@ -89,7 +91,7 @@ impl AmbientOcclusion {
             let mut r = si.spawn_ray(frame.to_world(wl));
             r.t_max = self.max_distance;
             counters.shadow += 1;
-            if !scene.geometry.occluded_from(&r, si.origin) {
+            if !scene.geometry.occluded_hinted(&r, Some(si.origin), &mut hint) {
                 l += wl.z / pdf * inv_n;
             }
         }
@@ -115,6 +117,7 @@ impl PixelIntegrator for AmbientOcclusion {
             }
             scratch.resize(self.n_samples as usize, [0.0; 2]);
             s.array2d(scratch);
+            s.coherent(scratch);
             let l = self.occlusion(scene, &si, ray.d, scratch, c);
             return [l; 3];
         }

@@ -21,6 +21,7 @@ pub struct PixelSamples {
     index: u32,
     dim: u64,
     rng: Rng,
+    order_scratch: Vec<([f32; 2], u32)>,
 }
 
 /// Stage tag of camera-sample streams in random keys.
@@ -29,7 +30,16 @@ const STAGE_CAMERA: u64 = 0x63616d;
 impl PixelSamples {
     /// A stream for `spec`'s sampler with `seed` (call [`PixelSamples::start`] before use).
     pub fn new(spec: &SamplerSpec, seed: u64) -> Self {
-        PixelSamples { kind: spec.kind, seed, spp: spec.spp.max(1), pixel_key: 0, index: 0, dim: 0, rng: Rng::new(0) }
+        PixelSamples {
+            kind: spec.kind,
+            seed,
+            spp: spec.spp.max(1),
+            pixel_key: 0,
+            index: 0,
+            dim: 0,
+            rng: Rng::new(0),
+            order_scratch: Vec::new(),
+        }
     }
 
     /// Positions the stream at sample `index` of pixel (x, y).
@@ -57,6 +67,11 @@ impl PixelSamples {
         }
     }
 
+    /// Reorders an array from [`PixelSamples::array2d`] coherently (see [`coherent_order`]).
+    pub fn coherent(&mut self, points: &mut [[f32; 2]]) {
+        coherent_order(points, &mut self.order_scratch);
+    }
+
     /// Fills `out` with the next 2-D array of this sample (e.g. ambient-occlusion directions).
     pub fn array2d(&mut self, out: &mut [[f32; 2]]) {
         match self.kind {
@@ -70,8 +85,54 @@ impl PixelSamples {
     }
 }
 
+/// Reorders 2-D sample points so consecutive points are neighbours in the unit square (a counting sort into
+/// a k×k grid of cells visited in serpentine order, k = ⌈√n⌉). The set of points is unchanged, so every
+/// estimate over them is too; occlusion queries from one point then meet the same blockers in a row (see
+/// `scene::accel::OccluderHint`). `scratch` is reused storage.
+pub fn coherent_order(points: &mut [[f32; 2]], scratch: &mut Vec<([f32; 2], u32)>) {
+    let n = points.len();
+    if n < 4 {
+        return;
+    }
+    let k = (n as f64).sqrt().ceil() as u32;
+    let cell = |p: [f32; 2]| {
+        let x = ((p[0] * k as f32) as u32).min(k - 1);
+        let y = ((p[1] * k as f32) as u32).min(k - 1);
+        y * k + if y % 2 == 0 { x } else { k - 1 - x }
+    };
+    scratch.clear();
+    scratch.extend(points.iter().map(|&p| (p, cell(p))));
+    // Stable: points sharing a cell keep their order, so the result is a pure function of the input.
+    scratch.sort_by_key(|&(_, c)| c);
+    for (dst, (p, _)) in points.iter_mut().zip(scratch.iter()) {
+        *dst = *p;
+    }
+}
+
 #[cfg(test)]
-mod tests {
+mod coherent_tests {
+    use super::*;
+
+    #[test]
+    fn coherent_order_keeps_the_points_and_makes_neighbours_adjacent() {
+        let mut rng = crate::sampling::Rng::new(4);
+        let mut pts: Vec<[f32; 2]> = (0..256).map(|_| rng.uniform2()).collect();
+        let before = {
+            let mut v = pts.clone();
+            v.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            v
+        };
+        let step = |v: &[[f32; 2]]| {
+            v.windows(2).map(|w| ((w[0][0] - w[1][0]).powi(2) + (w[0][1] - w[1][1]).powi(2)).sqrt()).sum::<f32>()
+        };
+        let random_path = step(&pts);
+        coherent_order(&mut pts, &mut Vec::new());
+        let mut after = pts.clone();
+        after.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        assert_eq!(before, after);
+        assert!(step(&pts) < random_path / 4.0);
+    }
+
     use super::*;
 
     fn spec(kind: SamplerKind, spp: u32) -> SamplerSpec {

@@ -4,7 +4,7 @@
 
 use glam::Vec3A;
 
-use crate::scene::accel::{Accel, Hit, PrimOrigin, PrimRef};
+use crate::scene::accel::{Accel, Hit, OccluderHint, PrimOrigin, PrimRef};
 use crate::scene::mesh::TriangleMesh;
 use crate::scene::ray::{Ray, gamma, offset_ray_origin};
 use crate::scene::shapes::quadric::{QuadricHit, transform_normal, transform_point_with_error};
@@ -93,6 +93,13 @@ impl Geometry {
     #[inline]
     pub fn occluded(&self, ray: &Ray) -> bool {
         self.accel.occluded(ray)
+    }
+
+    /// [`Geometry::occluded`] for a ray leaving `from` (not tested), trying the previous blocker in `hint`
+    /// first (see [`OccluderHint`]).
+    #[inline]
+    pub fn occluded_hinted(&self, ray: &Ray, from: Option<PrimOrigin>, hint: &mut OccluderHint) -> bool {
+        self.accel.occluded_hinted(ray, from, hint)
     }
 
     /// [`Geometry::occluded`] for a ray leaving the surface `from` (which is then not tested).

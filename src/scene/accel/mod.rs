@@ -19,7 +19,7 @@ use crate::scene::shapes::quadric::{Quadric, transform_bounds};
 use crate::scene::shapes::triangle::{self, RayShear};
 
 mod traverse;
-use traverse::{TravRay, intersect_node};
+use traverse::{TravRay, has_avx2, intersect_node};
 
 /// What a BVH leaf entry is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -86,6 +86,17 @@ pub struct PrimOrigin {
 struct Item {
     verts: [[f32; 3]; 3],
     r: PrimRef,
+}
+
+/// The primitive that blocked the previous occlusion query from the same point: tested first by the next
+/// query (rays leaving one point in nearby directions are often blocked by the same triangle). Testing it
+/// first never changes an answer — any blocker proves occlusion — it only skips traversals.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct OccluderHint {
+    /// Top-level slot + 1 (0: no hint).
+    top: u32,
+    /// Slot inside the instance's object BVH, when the top-level entry is an instance.
+    inner: u32,
 }
 
 /// What an occlusion query leaves out: a top-level triangle, or a triangle inside one instance.
@@ -232,14 +243,54 @@ impl Accel {
     /// [`Accel::occluded`] for a ray leaving the surface `from`: that triangle is not tested (it cannot
     /// block the ray). The answer is the same as [`Accel::occluded`]'s.
     pub fn occluded_from(&self, ray: &Ray, from: PrimOrigin) -> bool {
-        let skip = match from {
-            PrimOrigin { prim: p @ PrimRef::Triangle { .. }, instance: None } => Skip { top: Some(p), inner: None },
-            PrimOrigin { prim: p @ PrimRef::Triangle { .. }, instance: Some(i) } => {
+        self.occluded_hinted(ray, Some(from), &mut OccluderHint::default())
+    }
+
+    /// [`Accel::occluded`] for a ray leaving `from` (if given), first testing the blocker remembered in
+    /// `hint` and remembering the new one. The answer is the same as [`Accel::occluded`]'s.
+    pub fn occluded_hinted(&self, ray: &Ray, from: Option<PrimOrigin>, hint: &mut OccluderHint) -> bool {
+        if hint.top != 0 && self.hint_blocks(ray, *hint) {
+            return true;
+        }
+        let skip = Self::skip_for(from);
+        match self.any(&self.top, ray, Some(&skip)) {
+            Some((top, inner)) => {
+                *hint = OccluderHint { top: top + 1, inner };
+                true
+            }
+            None => false,
+        }
+    }
+
+    fn hint_blocks(&self, ray: &Ray, hint: OccluderHint) -> bool {
+        let Some(it) = self.top.items.get(hint.top as usize - 1) else { return false };
+        match it.r {
+            PrimRef::Instance(i) => {
+                let inst = &self.instances[i as usize];
+                let Some(inner) = self.objects[inst.object as usize].items.get(hint.inner as usize) else {
+                    return false;
+                };
+                let local = Ray {
+                    o: inst.object_from_world.transform_point3a(ray.o),
+                    d: inst.object_from_world.transform_vector3a(ray.d),
+                    t_max: ray.t_max,
+                };
+                self.item_blocks(inner, &local, &RayShear::new(local.o, local.d))
+            }
+            _ => self.item_blocks(it, ray, &RayShear::new(ray.o, ray.d)),
+        }
+    }
+
+    fn skip_for(from: Option<PrimOrigin>) -> Skip {
+        match from {
+            Some(PrimOrigin { prim: p @ PrimRef::Triangle { .. }, instance: None }) => {
+                Skip { top: Some(p), inner: None }
+            }
+            Some(PrimOrigin { prim: p @ PrimRef::Triangle { .. }, instance: Some(i) }) => {
                 Skip { top: None, inner: Some((i, p)) }
             }
             _ => Skip::default(),
-        };
-        self.any(&self.top, ray, Some(&skip)).is_some()
+        }
     }
 
     #[inline]
@@ -258,7 +309,7 @@ impl Accel {
         let mut best: Option<Hit> = None;
         let mut state = bvh.new_traversal(ray.d);
         let mut node;
-        obvhs::traverse!(bvh, node, state, intersect_node(node, &tr, state.oct_inv4), {
+        obvhs::traverse!(bvh, node, state, intersect_node::<false>(node, &tr, state.oct_inv4), {
             let it = &level.items[state.primitive_id as usize];
             let r = Ray { t_max: tr.t_max, ..*ray };
             let found =
@@ -293,6 +344,23 @@ impl Accel {
 
     /// The slot of a primitive of `level` blocking `ray` (and, for an instance, the slot inside it).
     fn any(&self, level: &Level, ray: &Ray, skip: Option<&Skip>) -> Option<(u32, u32)> {
+        #[cfg(target_arch = "x86_64")]
+        if has_avx2() {
+            // SAFETY: the CPU supports AVX2.
+            return unsafe { self.any_avx2(level, ray, skip) };
+        }
+        self.any_impl::<false>(level, ray, skip)
+    }
+
+    /// [`Accel::any`] compiled with AVX2 enabled, so the 8-wide node test inlines into the traversal loop.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn any_avx2(&self, level: &Level, ray: &Ray, skip: Option<&Skip>) -> Option<(u32, u32)> {
+        self.any_impl::<true>(level, ray, skip)
+    }
+
+    #[inline(always)]
+    fn any_impl<const WIDE: bool>(&self, level: &Level, ray: &Ray, skip: Option<&Skip>) -> Option<(u32, u32)> {
         let bvh = level.bvh.as_ref()?;
         let shear = RayShear::new(ray.o, ray.d);
         let tr = TravRay::new(ray.o, ray.d, ray.t_max);
@@ -300,7 +368,7 @@ impl Accel {
         let mut state = bvh.new_traversal(ray.d);
         let mut node;
         'search: {
-            obvhs::traverse!(bvh, node, state, intersect_node(node, &tr, state.oct_inv4), {
+            obvhs::traverse!(bvh, node, state, intersect_node::<WIDE>(node, &tr, state.oct_inv4), {
                 let slot = state.primitive_id;
                 let it = &level.items[slot as usize];
                 if skip.is_some_and(|k| k.top == Some(it.r)) {

@@ -17,7 +17,6 @@ pub(super) struct TravRay {
     neg: [bool; 3],
     /// Current far limit of the search (shrinks as closer hits are found).
     pub t_max: f32,
-    wide: bool,
 }
 
 /// Smallest |direction component| used for the reciprocal (an exact 0 would give ∞·0 = NaN in the slab test).
@@ -29,16 +28,18 @@ impl TravRay {
     pub fn new(o: Vec3A, d: Vec3A, t_max: f32) -> Self {
         let safe = |v: f32| if v.abs() < TINY { TINY.copysign(v) } else { v };
         let inv_d = Vec3A::new(1.0 / safe(d.x), 1.0 / safe(d.y), 1.0 / safe(d.z));
-        TravRay { o, inv_d, neg: [d.x < 0.0, d.y < 0.0, d.z < 0.0], t_max, wide: has_avx2() }
+        TravRay { o, inv_d, neg: [d.x < 0.0, d.y < 0.0, d.z < 0.0], t_max }
     }
 }
 
-/// The obvhs child hit mask of `node` for `r` (bit layout as `CwBvhNode::intersect_ray`).
+/// The obvhs child hit mask of `node` for `r` (bit layout as `CwBvhNode::intersect_ray`). `WIDE` selects
+/// the 8-wide AVX2 box test: callers instantiate it only inside a function compiled with AVX2 enabled
+/// (see [`has_avx2`]), so it inlines there.
 #[inline(always)]
-pub(super) fn intersect_node(node: &CwBvhNode, r: &TravRay, oct_inv4: u32) -> u32 {
+pub(super) fn intersect_node<const WIDE: bool>(node: &CwBvhNode, r: &TravRay, oct_inv4: u32) -> u32 {
     #[cfg(target_arch = "x86_64")]
-    let mut mask = if r.wide {
-        // SAFETY: `wide` is set only when the CPU reports AVX2.
+    let mut mask = if WIDE {
+        // SAFETY: WIDE is true only on paths entered after `has_avx2()` returned true.
         unsafe { child_mask_avx2(node, r) }
     } else {
         child_mask(node, r)
@@ -110,6 +111,7 @@ fn child_mask(node: &CwBvhNode, r: &TravRay) -> u32 {
 /// on the CPU.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
+#[inline]
 unsafe fn child_mask_avx2(node: &CwBvhNode, r: &TravRay) -> u32 {
     use std::arch::x86_64::*;
     #[inline(always)]
@@ -133,7 +135,7 @@ unsafe fn child_mask_avx2(node: &CwBvhNode, r: &TravRay) -> u32 {
 
 /// Whether the 8-wide node test can run (the standard library caches the CPU query).
 #[inline]
-fn has_avx2() -> bool {
+pub(super) fn has_avx2() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
         std::arch::is_x86_feature_detected!("avx2")
@@ -191,7 +193,11 @@ mod tests {
             let state = bvh.new_traversal(d);
             let node = &bvh.nodes[i % bvh.nodes.len()];
             let a = node.intersect_ray(&ray, state.oct_inv4);
-            let b = intersect_node(node, &tr, state.oct_inv4);
+            let b = if has_avx2() {
+                intersect_node::<true>(node, &tr, state.oct_inv4)
+            } else {
+                intersect_node::<false>(node, &tr, state.oct_inv4)
+            };
             if a != b {
                 differ += 1;
             }
@@ -220,9 +226,8 @@ mod tests {
                 if i % 7 == 0 { 0.0 } else { rng.uniform() - 0.5 },
             );
             let t_max = if i % 3 == 0 { f32::INFINITY } else { rng.uniform() * 5.0 };
-            let mut tr = TravRay::new(o, d, t_max);
+            let tr = TravRay::new(o, d, t_max);
             let node = &bvh.nodes[i % bvh.nodes.len()];
-            tr.wide = false;
             let narrow = child_mask(node, &tr);
             if has_avx2() {
                 // SAFETY: checked just above.
