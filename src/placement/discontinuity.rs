@@ -23,6 +23,8 @@ const STAGE_DRAW: u64 = 0x4447_0001;
 const STAGE_FALLBACK: u64 = 0x4447_0002;
 /// Rows per parallel band when gathering neighbour sets.
 const BAND: usize = 8;
+/// Side of the pixel tiles whose selections share one candidate list ([`CacheIndex::select_group`]).
+const TILE: usize = 8;
 
 /// DGS — discontinuity-guided sampling.
 ///
@@ -64,24 +66,49 @@ struct Band {
 }
 
 fn gather_band(g: &GBuffer, index: &CacheIndex, rows: std::ops::Range<usize>) -> Band {
+    let k = index.lookup().keep;
+    let (y0, nrows) = (rows.start, rows.len());
+    // Per pixel of the band: its selection (sorted ids, padded with u32::MAX), found tile by tile.
+    let mut sel = vec![u32::MAX; g.width * nrows * k];
+    let mut lens = vec![0usize; g.width * nrows];
+    let mut queries = Vec::with_capacity(TILE * TILE);
+    let mut where_ = Vec::with_capacity(TILE * TILE);
+    for tx in (0..g.width).step_by(TILE) {
+        for ty in (0..nrows).step_by(TILE) {
+            queries.clear();
+            where_.clear();
+            for y in ty..(ty + TILE).min(nrows) {
+                for x in tx..(tx + TILE).min(g.width) {
+                    if let Some(q) = g.get(g.id(x, y0 + y)).and_then(|sp| usable_normal(sp).map(|n| (sp.p, n))) {
+                        queries.push(q);
+                        where_.push(y * g.width + x);
+                    }
+                }
+            }
+            index.select_group(&queries, |i, near| {
+                let at = where_[i];
+                let slot = &mut sel[at * k..(at + 1) * k];
+                for (s, nb) in slot.iter_mut().zip(near) {
+                    *s = nb.id;
+                }
+                slot[..near.len()].sort_unstable();
+                lens[at] = near.len();
+            });
+        }
+    }
     let mut b = Band { off: vec![0], ..Default::default() };
-    let mut near = Vec::new();
-    let mut set: Vec<u32> = Vec::new();
-    for y in rows {
+    for y in 0..nrows {
         let mut prev: Option<u32> = None;
         for x in 0..g.width {
-            let Some((p, n)) = g.get(g.id(x, y)).and_then(|sp| usable_normal(sp).map(|n| (sp.p, n))) else {
+            let at = y * g.width + x;
+            if !where_valid(g, x, y0 + y) {
                 b.pixel_set.push(u32::MAX);
                 prev = None;
                 continue;
-            };
-            index.select(p, n, &mut near);
-            set.clear();
-            set.extend(near.iter().map(|nb| nb.id));
-            set.sort_unstable();
+            }
+            let set = &sel[at * k..at * k + lens[at]];
             // Neighbouring pixels usually blend the same caches: reuse the previous pixel's set.
-            if let Some(s) =
-                prev.filter(|&s| b.ids[b.off[s as usize] as usize..b.off[s as usize + 1] as usize] == set[..])
+            if let Some(s) = prev.filter(|&s| &b.ids[b.off[s as usize] as usize..b.off[s as usize + 1] as usize] == set)
             {
                 b.pixel_set.push(s);
                 continue;
@@ -90,7 +117,7 @@ fn gather_band(g: &GBuffer, index: &CacheIndex, rows: std::ops::Range<usize>) ->
             for (i, &a) in set.iter().enumerate() {
                 b.pairs.extend(set[i + 1..].iter().map(|&c| ((a as u64) << 32) | c as u64));
             }
-            b.ids.extend_from_slice(&set);
+            b.ids.extend_from_slice(set);
             b.off.push(b.ids.len() as u32);
             b.pixel_set.push(s);
             prev = Some(s);
@@ -99,6 +126,11 @@ fn gather_band(g: &GBuffer, index: &CacheIndex, rows: std::ops::Range<usize>) ->
     b.pairs.sort_unstable();
     b.pairs.dedup();
     b
+}
+
+/// Whether pixel (x, y) takes part in the map.
+fn where_valid(g: &GBuffer, x: usize, y: usize) -> bool {
+    g.get(g.id(x, y)).and_then(usable_normal).is_some()
 }
 
 /// Distinct pairs with their differences, indexed by first cache (CSR) for lookups.

@@ -22,6 +22,8 @@ mod search;
 mod split;
 #[cfg(test)]
 mod test_scenes;
+#[cfg(test)]
+mod timing;
 
 pub use adaptive::AdaptiveSampling;
 pub use discontinuity::Discontinuity;
