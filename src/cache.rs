@@ -46,11 +46,8 @@ pub const EXACT_HIT: f32 = 1e-7;
 #[derive(Clone, Copy, Debug)]
 struct Cand {
     p: Vec3A,
-    n: Vec3A,
     dc: f32,
     id: u32,
-    /// Rank of `id` among the group's candidates, so (d², rank) orders ties by id.
-    rank: u32,
 }
 
 /// Reusable buffers of [`CacheIndex::select_group`].
@@ -60,8 +57,8 @@ struct GroupScratch {
     cand: Vec<Cand>,
     /// Per query: the N nearest as packed keys.
     ranked: Vec<u64>,
-    /// Candidate index by rank.
-    by_rank: Vec<u32>,
+    /// Packed (distance to the centre, id) keys while gathering.
+    keys: Vec<u64>,
 }
 
 /// Packs a non-negative distance (or squared distance) and an id into one key ordered by (distance, id):
@@ -77,13 +74,11 @@ fn unkey(k: u64) -> (f32, u32) {
     (f32::from_bits((k >> 32) as u32), k as u32)
 }
 
-/// Keeps the `k` smallest keys, sorted.
+/// Keeps the `k` smallest keys (in no particular order: steps 2–5 do not depend on it).
 fn top_k(keys: &mut Vec<u64>, k: usize) {
-    if keys.len() > 2 * k && k > 0 {
+    if keys.len() > k && k > 0 {
         keys.select_nth_unstable(k - 1);
-        keys.truncate(k);
     }
-    keys.sort_unstable();
     keys.truncate(k);
 }
 
@@ -247,12 +242,9 @@ impl CacheIndex {
     ) {
         let ok = |&(p, n): &(Vec3A, Vec3A)| p.is_finite() && n.is_finite();
         let centre = match &self.tree {
-            Some(tree) if queries.len() > 1 && self.lookup.keep > 0 && self.lookup.candidates > 0 => self
-                .group_candidates(tree, queries.iter().filter(|q| ok(q)).map(|q| q.0), &mut scratch.cand)
-                .inspect(|_| {
-                    scratch.by_rank.resize(scratch.cand.len(), 0);
-                    scratch.cand.iter().enumerate().for_each(|(i, cd)| scratch.by_rank[cd.rank as usize] = i as u32);
-                }),
+            Some(tree) if queries.len() > 1 && self.lookup.keep > 0 && self.lookup.candidates > 0 => {
+                self.group_candidates(tree, queries.iter().filter(|q| ok(q)).map(|q| q.0), scratch)
+            }
             _ => None,
         };
         if centre.is_none() && queries.len() > 1 {
@@ -266,17 +258,8 @@ impl CacheIndex {
             match centre {
                 Some(c) if ok(&(p, n)) => {
                     self.nearest_among(&scratch.cand, c, p, prev, &mut scratch.ranked);
-                    prev = scratch.ranked.last().map(|&k| (p, unkey(k).0.sqrt()));
-                    let (cand, by_rank) = (&scratch.cand, &scratch.by_rank);
-                    self.finish(
-                        &scratch.ranked,
-                        |rank| {
-                            let cd = &cand[by_rank[rank as usize] as usize];
-                            (cd.id, cd.n)
-                        },
-                        n,
-                        out,
-                    );
+                    prev = scratch.ranked.iter().max().map(|&k| (p, unkey(k).0.sqrt()));
+                    self.finish(&scratch.ranked, |id| (id, self.points[id as usize].1), n, out);
                 }
                 _ => self.select(p, n, out),
             }
@@ -285,7 +268,7 @@ impl CacheIndex {
     }
 
     /// The canonical N nearest to `p` among a group's candidates (sorted by distance to `c`) into `ranked`
-    /// as packed (d², rank) keys (rank orders like id). With e = ‖p − c‖ and r = the N-th smallest distance to `c`, the N nearest
+    /// as packed (d², id) keys. With e = ‖p − c‖ and r = the N-th smallest distance to `c`, the N nearest
     /// to `p` lie within r + e of `p`, and any such cache within r + 2e of `c`: only that prefix of the list
     /// is scanned and only caches within r + e are ranked (margins for rounding).
     fn nearest_among(&self, cand: &[Cand], c: Vec3A, p: Vec3A, prev: Option<(Vec3A, f32)>, ranked: &mut Vec<u64>) {
@@ -308,7 +291,7 @@ impl CacheIndex {
             }
             let d2 = (cd.p - p).length_squared();
             if d2 <= keep2 {
-                ranked.push(key(d2, cd.rank));
+                ranked.push(key(d2, cd.id));
             }
         }
         top_k(ranked, k);
@@ -320,8 +303,10 @@ impl CacheIndex {
         &self,
         tree: &ImmutableKdTree<f32, 3>,
         ps: impl Iterator<Item = Vec3A> + Clone,
-        out: &mut Vec<Cand>,
+        scratch: &mut GroupScratch,
     ) -> Option<Vec3A> {
+        let (keys, out) = (&mut scratch.keys, &mut scratch.cand);
+        keys.clear();
         out.clear();
         let (lo, hi) = ps
             .clone()
@@ -331,33 +316,34 @@ impl CacheIndex {
         }
         let c = 0.5 * (lo + hi);
         let k = self.lookup.candidates.min(self.ids.len());
-        let by_centre = |id: u32| {
-            let (p, n) = self.points[id as usize];
-            Cand { p, n, dc: (p - c).length(), id, rank: 0 }
-        };
+        let by_centre = |id: u32| key(self.d2(id, c).sqrt(), id);
         if self.ids.len() <= GROUP_CAP.max(k) {
-            out.extend(self.ids.iter().map(|&id| by_centre(id)));
+            keys.extend(self.ids.iter().map(|&id| by_centre(id)));
         } else {
             let rad = ps.map(|p| (p - c).length()).fold(0.0f32, f32::max);
             let near = tree.query(&c.to_array()).nearest_n::<SquaredEuclidean<f32>>(NonZeroUsize::new(k)?).execute();
             let d = near.iter().map(|r| self.d2(self.ids[r.item as usize], c).sqrt()).fold(0.0f32, f32::max);
+            // A group wider than its caches' spacing (a depth edge) would gather too many: split it.
             if rad > d {
                 return None;
             }
+            // Every member's N nearest lie within d + 2·rad of c (triangle inequality); margin for rounding.
             let r = (d + 2.0 * rad) * (1.0 + 1e-5) + f32::MIN_POSITIVE;
             let within = tree.query(&c.to_array()).within::<SquaredEuclidean<f32>>(r * r).unsorted().execute();
             if within.len() > GROUP_CAP {
                 return None;
             }
-            out.extend(within.iter().map(|r| by_centre(self.ids[r.item as usize])));
+            keys.extend(within.iter().map(|r| by_centre(self.ids[r.item as usize])));
         }
-        out.sort_unstable_by_key(|cd| cd.id);
-        out.iter_mut().enumerate().for_each(|(i, cd)| cd.rank = i as u32);
-        out.sort_unstable_by_key(|cd| key(cd.dc, cd.id));
+        keys.sort_unstable();
+        out.extend(keys.iter().map(|&k| {
+            let (dc, id) = unkey(k);
+            Cand { p: self.points[id as usize].0, dc, id }
+        }));
         Some(c)
     }
 
-    /// Steps 2–5 on the N nearest (`ranked`: packed (d², key) in order; `info(key)` = (id, normal)).
+    /// Steps 2–5 on the N nearest (`ranked`: packed (d², key), any order; `info(key)` = (id, normal)).
     fn finish(&self, ranked: &[u64], info: impl Fn(u32) -> (u32, Vec3A), n: Vec3A, out: &mut Vec<Neighbour>) {
         out.clear();
         let dist = |d2: f32, dot: f32| d2.sqrt() + self.lambda * (1.0 - dot).max(0.0).sqrt();

@@ -207,28 +207,36 @@ fn band_terms(b: &Band, table: &PairTable) -> (Vec<f32>, Vec<f32>) {
     b.pixel_set.iter().map(|&s| set_terms.get(s as usize).copied().unwrap_or((0.0, 0.0))).unzip()
 }
 
-/// G(s) = Σ_{q in the window, q usable, q ≠ s} (1 − n_s·n_q) (Eq. 3); 0 for unusable pixels.
+/// G(s) = Σ_{q in the window, q usable, q ≠ s} (1 − n_s·n_q) (Eq. 3); 0 for unusable pixels. Rows in
+/// parallel; unusable pixels carry a zero normal and weight 0.
 fn geometry_term(g: &GBuffer, window: usize) -> Vec<f32> {
-    let r = (window.max(1) / 2) as isize;
-    let normals: Vec<Option<Vec3A>> = g.points.par_iter().map(|sp| sp.as_ref().and_then(usable_normal)).collect();
-    (0..g.width * g.height)
-        .into_par_iter()
-        .map(|i| {
-            let Some(ns) = normals[i] else { return 0.0 };
-            let (x, y) = ((i % g.width) as isize, (i / g.width) as isize);
+    let r = window.max(1) / 2;
+    let (w, h) = (g.width, g.height);
+    let normals: Vec<(Vec3A, f32)> = g
+        .points
+        .par_iter()
+        .map(|sp| sp.as_ref().and_then(usable_normal).map_or((Vec3A::ZERO, 0.0), |n| (n, 1.0)))
+        .collect();
+    let mut out = vec![0f32; w * h];
+    out.par_chunks_mut(w.max(1)).enumerate().for_each(|(y, row)| {
+        let (y0, y1) = (y.saturating_sub(r), (y + r).min(h - 1));
+        for (x, o) in row.iter_mut().enumerate() {
+            let (ns, ws) = normals[y * w + x];
+            if ws == 0.0 {
+                continue;
+            }
+            let (x0, x1) = (x.saturating_sub(r), (x + r).min(w - 1));
             let mut sum = 0.0;
-            for qy in (y - r).max(0)..=(y + r).min(g.height as isize - 1) {
-                for qx in (x - r).max(0)..=(x + r).min(g.width as isize - 1) {
-                    if (qx, qy) != (x, y) {
-                        if let Some(nq) = normals[qy as usize * g.width + qx as usize] {
-                            sum += 1.0 - ns.dot(nq);
-                        }
-                    }
+            for qy in y0..=y1 {
+                for &(nq, wq) in &normals[qy * w + x0..=qy * w + x1] {
+                    sum += wq * (1.0 - ns.dot(nq));
                 }
             }
-            sum
-        })
-        .collect()
+            // The pixel itself is in the window: take its own term back out.
+            *o = (sum - (1.0 - ns.dot(ns))).max(0.0);
+        }
+    });
+    out
 }
 
 /// Min–max normalisation to [0, 1] over the pixels where `mask` is set (A11); 0 when max = min.
@@ -385,6 +393,29 @@ mod tests {
         };
         let (at, away) = (mean(&near), mean(&|i| g.points[i].is_some() && !near(i)));
         assert!(at > 5.0 * away, "{at} vs {away}");
+    }
+
+    #[test]
+    fn the_geometry_term_is_eq3_over_the_window() {
+        let g = ts::nan_normals(23, 17);
+        let geo = geometry_term(&g, 5);
+        for y in 0..17usize {
+            for x in 0..23usize {
+                let n = |x: usize, y: usize| g.get(g.id(x, y)).and_then(usable_normal);
+                let want = n(x, y).map_or(0.0, |ns| {
+                    let mut sum = 0.0;
+                    for qy in y.saturating_sub(2)..=(y + 2).min(16) {
+                        for qx in x.saturating_sub(2)..=(x + 2).min(22) {
+                            if (qx, qy) != (x, y) {
+                                sum += n(qx, qy).map_or(0.0, |nq| 1.0 - ns.dot(nq));
+                            }
+                        }
+                    }
+                    sum
+                });
+                assert!((geo[y * 23 + x] - want).abs() < 1e-4, "({x}, {y}): {} vs {want}", geo[y * 23 + x]);
+            }
+        }
     }
 
     #[test]

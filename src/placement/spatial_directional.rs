@@ -39,11 +39,11 @@ struct SdRule {
 }
 
 impl NodeRule for SdRule {
-    fn process(&self, pts: &mut [Pt]) -> (f32, Option<usize>) {
+    fn process(&self, pts: &mut [Pt]) -> (f32, f32, Option<usize>) {
         let (lo, hi) = sd_bounds(pts, self.s);
         let (extent, _) = sd_extent(&lo, &hi);
         let split = if pts.len() >= self.min_size && extent > 0.0 { split_sd(pts, self.s, &lo, &hi) } else { None };
-        (extent, split)
+        (extent, 0.0, split)
     }
 }
 
