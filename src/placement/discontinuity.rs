@@ -329,6 +329,7 @@ impl AdaptivePlacement for Discontinuity {
         params: &PlacementParams,
         seed: u64,
     ) -> Result<AdaptiveInfo> {
+        super::budget::check_gbuffer(g)?;
         if budget == 0 {
             return Ok(AdaptiveInfo::default());
         }

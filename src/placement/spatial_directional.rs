@@ -56,6 +56,7 @@ fn normal_scale(pts: &[Pt]) -> f32 {
 
 impl InitialPlacement for SpatialDirectional {
     fn place(&self, g: &GBuffer, budget: usize, params: &PlacementParams, seed: u64) -> Result<Stage1> {
+        budget::check_gbuffer(g)?;
         let rule_of = |pts: &[Pt]| SplitRule::SpatialDirectional { normal_scale: normal_scale(pts) };
         let (mut pts, mut notes) = match budget::prelude(g, budget, params.meters_per_unit, Some(&rule_of)) {
             Prelude::Done(s) => return Ok(s),

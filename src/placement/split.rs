@@ -227,7 +227,7 @@ fn sph_bounds(pts: &[Pt]) -> ([f32; 2], [f32; 2]) {
 pub(crate) fn cone_spread(pts: &[Pt]) -> f32 {
     let sum: Vec3A = pts.iter().map(|q| q.normal()).sum();
     let len = sum.length();
-    if !(len > 1e-6 * pts.len() as f32) {
+    if len.is_nan() || len <= 1e-6 * pts.len() as f32 {
         return 360.0;
     }
     let mean = sum / len;

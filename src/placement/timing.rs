@@ -30,7 +30,7 @@ pub fn room(w: usize, h: usize) -> GBuffer {
 }
 
 /// CPU seconds (user + system) this process has used so far, from /proc/self/stat (0 where unavailable).
-pub fn cpu_seconds() -> f64 {
+fn cpu_seconds() -> f64 {
     let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
     let after = stat.rsplit(')').next().unwrap_or("");
     let f: Vec<f64> = after.split_whitespace().map(|x| x.parse().unwrap_or(0.0)).collect();
@@ -123,14 +123,4 @@ fn selection_timings() {
         }
         eprintln!("tile {tile}: {:.3} µs/px ({sum})", t.elapsed().as_secs_f64() * 1e6 / (rows * 1920) as f64);
     }
-}
-
-#[test]
-#[ignore = "profiling aid; run explicitly in release"]
-fn dgs_quarter_resolution() {
-    let g = room(960, 540);
-    let p = PlacementParams::default();
-    let s1 = ViewGuided { two_stage: true }.place(&g, 25_500, &p, 1).unwrap();
-    let mut oracle = MaskOracle::new(&g, &s1.sites);
-    time("DGS 4.5K at 960×540", || Discontinuity::default().place(&g, &s1, &mut oracle, 4_500, &p, 1).unwrap());
 }

@@ -111,6 +111,7 @@ impl ViewGuided {
 
 impl InitialPlacement for ViewGuided {
     fn place(&self, g: &GBuffer, budget: usize, params: &PlacementParams, seed: u64) -> Result<Stage1> {
+        budget::check_gbuffer(g)?;
         let rule = SplitRule::ViewGuided;
         let (mut pts, notes) = match budget::prelude(g, budget, params.meters_per_unit, Some(&|_: &[Pt]| rule)) {
             Prelude::Done(s) => return Ok(s),
