@@ -30,7 +30,7 @@ const TILE: usize = 8;
 ///
 /// | option | type | default | meaning |
 /// |---|---|---|---|
-/// | `terms` | Option<DgsTerms> | None | which terms form D; `None` takes `PlacementParams::dgs` (ablations `vgc+dgs:diff`, `vgc+dgs:geom` fix it) |
+/// | `terms` | `Option<DgsTerms>` | None | which terms form D; `None` takes `PlacementParams::dgs` (ablations `vgc+dgs:diff`, `vgc+dgs:geom` fix it) |
 /// | `PlacementParams::lookup` | LookupParams | N = 20, 30°, M = 6 | the §5 selection; its M is K, the caches compared per pixel (A9) |
 /// | `PlacementParams::dgs_window` | usize | 5 | side of the G window (Eq. 3) |
 ///

@@ -25,7 +25,7 @@ const STAGE_REP: u64 = 0x5344_0001;
 /// |---|---|---|---|
 /// | `PlacementParams::sd_min_size` | usize | 10 | S_min: a node with fewer points is a leaf (Fig. 1 shows 10 and 50) |
 ///
-/// The normal scale s is the mean of the three extents of the shading points' box / 8 [LS]; the threshold T
+/// The normal scale s is the mean of the three extents of the shading points' box / 8 (\[LS\]); the threshold T
 /// is searched in [1e-6·L, 4·L] on a log scale (reported in `PlacementInfo::sd_threshold`). When S_min makes
 /// the count saturate below the budget, the largest leaves are split further to meet it (with a note).
 /// Forms clusters with [`SplitRule::SpatialDirectional`].

@@ -32,11 +32,11 @@ const SIGMA_S_MIN: f32 = 1e-5;
 /// | option | type | default | meaning |
 /// |---|---|---|---|
 /// | `two_stage` | bool | false | the budget is stage 1's share of a two-stage total: σ_a is chosen for N1/(1 − R) caches |
-/// | `PlacementParams::sigma_a_deg` | Option<f32> | 15° at 120K … 25° at 25K | σ_a, the angular threshold |
+/// | `PlacementParams::sigma_a_deg` | `Option<f32>` | 15° at 120K … 25° at 25K | σ_a, the angular threshold |
 /// | `PlacementParams::gamma` | f32 | 0.2 | Γ of Eq. 1, per metre |
 /// | `PlacementParams::meters_per_unit` | f32 | 1 | scene units → metres for depths |
 /// | `PlacementParams::angular` | AngularMode | Cone | how normal spread is measured and split (A4) |
-/// | `PlacementParams::lambda` | Option<f32> | 0.5/L | λ of Eq. 2 |
+/// | `PlacementParams::lambda` | `Option<f32>` | 0.5/L | λ of Eq. 2 |
 /// | `PlacementParams::jitter` | f32 | 0.2 | jitter of the mean, fraction of the cluster extent (A6) |
 ///
 /// σ_s is searched in [1e-5·L, L] until the count is within 0.2 % of the budget (or 40 steps); the final
