@@ -74,10 +74,15 @@ fn unkey(k: u64) -> (f32, u32) {
     (f32::from_bits((k >> 32) as u32), k as u32)
 }
 
-/// Keeps the `k` smallest keys (in no particular order: steps 2–5 do not depend on it).
+/// Keeps the `k` smallest keys (steps 2–5 do not depend on their order). Short lists are sorted: for a
+/// few dozen keys that beats a selection.
 fn top_k(keys: &mut Vec<u64>, k: usize) {
-    if keys.len() > k && k > 0 {
-        keys.select_nth_unstable(k - 1);
+    if keys.len() > k {
+        if keys.len() <= 64 {
+            keys.sort_unstable();
+        } else if k > 0 {
+            keys.select_nth_unstable(k - 1);
+        }
     }
     keys.truncate(k);
 }
@@ -217,7 +222,7 @@ impl CacheIndex {
             return;
         }
         let ranked = self.nearest(tree, p);
-        self.finish(&ranked, |id| (id, self.points[id as usize].1), n, out);
+        self.finish(&ranked, n, &mut Vec::with_capacity(ranked.len()), out);
     }
 
     /// Selects for a group of shading points at once, calling `f(i, selection)` for each query in order;
@@ -259,7 +264,7 @@ impl CacheIndex {
                 Some(c) if ok(&(p, n)) => {
                     self.nearest_among(&scratch.cand, c, p, prev, &mut scratch.ranked);
                     prev = scratch.ranked.iter().max().map(|&k| (p, unkey(k).0.sqrt()));
-                    self.finish(&scratch.ranked, |id| (id, self.points[id as usize].1), n, out);
+                    self.finish(&scratch.ranked, n, &mut scratch.keys, out);
                 }
                 _ => self.select(p, n, out),
             }
@@ -343,32 +348,32 @@ impl CacheIndex {
         Some(c)
     }
 
-    /// Steps 2–5 on the N nearest (`ranked`: packed (d², key), any order; `info(key)` = (id, normal)).
-    fn finish(&self, ranked: &[u64], info: impl Fn(u32) -> (u32, Vec3A), n: Vec3A, out: &mut Vec<Neighbour>) {
+    /// Steps 2–5 on the N nearest (`ranked`: packed (d², id), any order), ordering through packed
+    /// (Dist, id) keys in `keys` (scratch).
+    fn finish(&self, ranked: &[u64], n: Vec3A, keys: &mut Vec<u64>, out: &mut Vec<Neighbour>) {
         out.clear();
+        keys.clear();
         let dist = |d2: f32, dot: f32| d2.sqrt() + self.lambda * (1.0 - dot).max(0.0).sqrt();
         // Step 2 (normal filter); step 5 falls back to all N candidates when it keeps none.
         for &k in ranked {
-            let (d2, key) = unkey(k);
-            let (id, nc) = info(key);
-            let dot = nc.dot(n);
+            let (d2, id) = unkey(k);
+            let dot = self.points[id as usize].1.dot(n);
             if dot >= self.cos_max {
-                out.push(Neighbour { id, dist: dist(d2, dot) });
+                keys.push(key(dist(d2, dot), id));
             }
         }
-        if out.is_empty() {
-            out.extend(ranked.iter().map(|&k| {
-                let (d2, key) = unkey(k);
-                let (id, nc) = info(key);
-                Neighbour { id, dist: dist(d2, nc.dot(n)) }
+        if keys.is_empty() {
+            keys.extend(ranked.iter().map(|&k| {
+                let (d2, id) = unkey(k);
+                key(dist(d2, self.points[id as usize].1.dot(n)), id)
             }));
         }
-        // Dist ≥ 0, so (Dist, id) packs into an ordered key like the distances above.
-        if out.len() > self.lookup.keep {
-            out.select_nth_unstable_by_key(self.lookup.keep - 1, |nb| key(nb.dist, nb.id));
-            out.truncate(self.lookup.keep);
-        }
-        out.sort_unstable_by_key(|nb| key(nb.dist, nb.id));
+        // Dist ≥ 0, so (Dist, id) packs into an ordered key; N is small, a plain sort beats a selection.
+        keys.sort_unstable();
+        out.extend(keys.iter().take(self.lookup.keep).map(|&k| {
+            let (dist, id) = unkey(k);
+            Neighbour { id, dist }
+        }));
     }
 
     /// The N nearest caches to `p` as packed (d², id) keys, ranked. One tree query of N + 1; only when the
