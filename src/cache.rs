@@ -42,6 +42,54 @@ pub struct Neighbour {
 /// cache takes that cache's value alone (ALGORITHMS.md §5 step 6).
 pub const EXACT_HIT: f32 = 1e-7;
 
+/// One candidate of a group: position, distance to the group centre, id.
+#[derive(Clone, Copy, Debug)]
+struct Cand {
+    p: Vec3A,
+    dc: f32,
+    id: u32,
+}
+
+/// Reusable buffers of [`CacheIndex::select_group`].
+#[derive(Debug, Default)]
+struct GroupScratch {
+    /// Shared candidates, by (distance to the centre, id).
+    cand: Vec<Cand>,
+    /// Per query: the N nearest as packed keys.
+    ranked: Vec<u64>,
+    /// Packed (distance to the centre, id) keys while gathering.
+    keys: Vec<u64>,
+}
+
+/// Packs a non-negative distance (or squared distance) and an id into one key ordered by (distance, id):
+/// the bits of a non-negative finite f32 order like the float.
+#[inline]
+fn key(d: f32, id: u32) -> u64 {
+    ((d.max(0.0).to_bits() as u64) << 32) | id as u64
+}
+
+/// The (distance, id) of a key.
+#[inline]
+fn unkey(k: u64) -> (f32, u32) {
+    (f32::from_bits((k >> 32) as u32), k as u32)
+}
+
+/// Keeps the `k` smallest keys (steps 2–5 do not depend on their order). Short lists are sorted: for a
+/// few dozen keys that beats a selection.
+fn top_k(keys: &mut Vec<u64>, k: usize) {
+    if keys.len() > k {
+        if keys.len() <= 64 {
+            keys.sort_unstable();
+        } else if k > 0 {
+            keys.select_nth_unstable(k - 1);
+        }
+    }
+    keys.truncate(k);
+}
+
+/// Largest shared candidate list of [`CacheIndex::select_group`]; longer ones split the group.
+const GROUP_CAP: usize = 192;
+
 /// A kd-tree over cache positions with the §5 selection and Eq. 5 weights.
 ///
 /// Caches whose position or normal is not finite, or whose normal has zero length, are left out of the
@@ -150,11 +198,10 @@ impl CacheIndex {
         self.points.get(id as usize).copied()
     }
 
-    /// Eq. 5 distance between cache `id` and the shading point (p, n).
+    /// Squared distance from cache `id` to `p` — the one distance every candidate ranking uses.
     #[inline]
-    fn dist(&self, id: u32, p: Vec3A, n: Vec3A) -> f32 {
-        let (pc, nc) = self.points[id as usize];
-        (pc - p).length() + self.lambda * (1.0 - nc.dot(n)).max(0.0).sqrt()
+    fn d2(&self, id: u32, p: Vec3A) -> f32 {
+        (self.points[id as usize].0 - p).length_squared()
     }
 
     /// Selects the caches for shading point (p, n) into `out` (cleared first), sorted by Dist, then id —
@@ -165,52 +212,191 @@ impl CacheIndex {
     /// 4. keep the M smallest;
     /// 5. if step 2 kept none, use all N candidates in steps 3–4.
     ///
-    /// A query with a non-finite position or normal selects nothing. `n` should be unit length.
+    /// A query with a non-finite position or normal selects nothing. `n` should be unit length. For many
+    /// nearby queries (a tile, the samples of a pixel) [`CacheIndex::select_group`] gives the same answers
+    /// several times faster.
     pub fn select(&self, p: Vec3A, n: Vec3A, out: &mut Vec<Neighbour>) {
         out.clear();
         let Some(tree) = &self.tree else { return };
-        if !p.is_finite() || !n.is_finite() || self.lookup.keep == 0 {
+        if !p.is_finite() || !n.is_finite() || self.lookup.keep == 0 || self.lookup.candidates == 0 {
             return;
         }
-        let n_cand = self.lookup.candidates.min(self.ids.len());
-        let Some(n_cand) = NonZeroUsize::new(n_cand) else { return };
-        let mut cand = self.nearest(tree, p, n_cand);
-        // Step 2 (normal filter) keeps the candidates in place; step 5 falls back to all of them.
-        let kept = cand.iter().filter(|&&id| self.points[id as usize].1.dot(n) >= self.cos_max).count();
-        if kept > 0 {
-            cand.retain(|&id| self.points[id as usize].1.dot(n) >= self.cos_max);
-        }
-        out.extend(cand.into_iter().map(|id| Neighbour { id, dist: self.dist(id, p, n) }));
-        out.sort_unstable_by(|a, b| a.dist.total_cmp(&b.dist).then(a.id.cmp(&b.id)));
-        out.truncate(self.lookup.keep);
+        let ranked = self.nearest(tree, p);
+        self.finish(&ranked, n, &mut Vec::with_capacity(ranked.len()), out);
     }
 
-    /// The ids of the `k` nearest caches to `p`, ties at the k-th distance broken by id so the set does
-    /// not depend on the tree layout.
-    fn nearest(&self, tree: &ImmutableKdTree<f32, 3>, p: Vec3A, k: NonZeroUsize) -> Vec<u32> {
-        let q = p.to_array();
-        let k1 = k.get() + 1;
-        let res = match NonZeroUsize::new(k1) {
-            Some(k1) if k1.get() <= self.ids.len() => tree.query(&q).nearest_n::<SquaredEuclidean<f32>>(k1).execute(),
-            _ => tree.query(&q).nearest_n::<SquaredEuclidean<f32>>(k).execute(),
+    /// Selects for a group of shading points at once, calling `f(i, selection)` for each query in order;
+    /// every selection equals what [`CacheIndex::select`] returns for that query. Meant for nearby points
+    /// (a pixel tile, the sub-pixel samples of a pixel): the group shares two tree queries — the N nearest
+    /// to its centre c (farthest at distance r) and then every cache within r + 2ρ of c, ρ the group's radius,
+    /// which holds each member's N nearest by the triangle inequality — and ranks that list per query.
+    /// Groups wider than r (depth edges) or with long lists are halved, down to single queries.
+    pub fn select_group(&self, queries: &[(Vec3A, Vec3A)], mut f: impl FnMut(usize, &[Neighbour])) {
+        let mut out = Vec::new();
+        let mut scratch = GroupScratch::default();
+        self.group(queries, 0, &mut out, &mut scratch, &mut f);
+    }
+
+    fn group(
+        &self,
+        queries: &[(Vec3A, Vec3A)],
+        base: usize,
+        out: &mut Vec<Neighbour>,
+        scratch: &mut GroupScratch,
+        f: &mut impl FnMut(usize, &[Neighbour]),
+    ) {
+        let ok = |&(p, n): &(Vec3A, Vec3A)| p.is_finite() && n.is_finite();
+        let centre = match &self.tree {
+            Some(tree) if queries.len() > 1 && self.lookup.keep > 0 && self.lookup.candidates > 0 => {
+                self.group_candidates(tree, queries.iter().filter(|q| ok(q)).map(|q| q.0), scratch)
+            }
+            _ => None,
         };
-        let k = k.get();
-        // With one extra result we can tell whether the k-th distance is tied with a point left out; only then
-        // (coincident or symmetric caches) gather every point at that distance and break the tie by id.
-        let tied = res.len() > k && res[k].distance <= res[k - 1].distance;
-        if !tied {
-            return res.iter().take(k).map(|r| self.ids[r.item as usize]).collect();
+        if centre.is_none() && queries.len() > 1 {
+            let (a, b) = queries.split_at(queries.len() / 2);
+            self.group(a, base, out, scratch, f);
+            self.group(b, base + a.len(), out, scratch, f);
+            return;
         }
-        let radius = res[k - 1].distance;
-        let mut all: Vec<(f32, u32)> = tree
-            .query(&q)
-            .within::<SquaredEuclidean<f32>>(radius)
-            .execute()
-            .iter()
-            .map(|r| (r.distance, self.ids[r.item as usize]))
-            .collect();
-        all.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        all.into_iter().take(k).map(|(_, id)| id).collect()
+        let mut prev = None;
+        for (i, &(p, n)) in queries.iter().enumerate() {
+            match centre {
+                Some(c) if ok(&(p, n)) => {
+                    self.nearest_among(&scratch.cand, c, p, prev, &mut scratch.ranked);
+                    prev = scratch.ranked.iter().max().map(|&k| (p, unkey(k).0.sqrt()));
+                    self.finish(&scratch.ranked, n, &mut scratch.keys, out);
+                }
+                _ => self.select(p, n, out),
+            }
+            f(base + i, out);
+        }
+    }
+
+    /// The canonical N nearest to `p` among a group's candidates (sorted by distance to `c`) into `ranked`
+    /// as packed (d², id) keys. With e = ‖p − c‖ and r = the N-th smallest distance to `c`, the N nearest
+    /// to `p` lie within r + e of `p`, and any such cache within r + 2e of `c`: only that prefix of the list
+    /// is scanned and only caches within r + e are ranked (margins for rounding).
+    fn nearest_among(&self, cand: &[Cand], c: Vec3A, p: Vec3A, prev: Option<(Vec3A, f32)>, ranked: &mut Vec<u64>) {
+        ranked.clear();
+        let k = self.lookup.candidates.min(cand.len());
+        if k == 0 {
+            return;
+        }
+        let e = (p - c).length();
+        // Upper bounds of the N-th distance from p: via the centre, and via the previous query.
+        let mut r = cand[k - 1].dc + e;
+        if let Some((q, rq)) = prev {
+            r = r.min(rq + (p - q).length());
+        }
+        let keep = r * (1.0 + 1e-5) + f32::MIN_POSITIVE;
+        let (keep2, scan) = (keep * keep, (r + e) * (1.0 + 1e-5) + f32::MIN_POSITIVE);
+        for cd in cand {
+            if cd.dc > scan {
+                break;
+            }
+            let d2 = (cd.p - p).length_squared();
+            if d2 <= keep2 {
+                ranked.push(key(d2, cd.id));
+            }
+        }
+        top_k(ranked, k);
+    }
+
+    /// Candidate superset for a group of positions, sorted by (distance to the group centre, id), and that
+    /// centre; `None` when the group is wider than its caches' spacing or the list would exceed [`GROUP_CAP`].
+    fn group_candidates(
+        &self,
+        tree: &ImmutableKdTree<f32, 3>,
+        ps: impl Iterator<Item = Vec3A> + Clone,
+        scratch: &mut GroupScratch,
+    ) -> Option<Vec3A> {
+        let (keys, out) = (&mut scratch.keys, &mut scratch.cand);
+        keys.clear();
+        out.clear();
+        let (lo, hi) = ps
+            .clone()
+            .fold((Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        if !(lo.is_finite() && hi.is_finite()) {
+            return None;
+        }
+        let c = 0.5 * (lo + hi);
+        let k = self.lookup.candidates.min(self.ids.len());
+        let by_centre = |id: u32| key(self.d2(id, c).sqrt(), id);
+        if self.ids.len() <= GROUP_CAP.max(k) {
+            keys.extend(self.ids.iter().map(|&id| by_centre(id)));
+        } else {
+            let rad = ps.map(|p| (p - c).length()).fold(0.0f32, f32::max);
+            let near = tree.query(&c.to_array()).nearest_n::<SquaredEuclidean<f32>>(NonZeroUsize::new(k)?).execute();
+            let d = near.iter().map(|r| self.d2(self.ids[r.item as usize], c).sqrt()).fold(0.0f32, f32::max);
+            // A group wider than its caches' spacing (a depth edge) would gather too many: split it.
+            if rad > d {
+                return None;
+            }
+            // Every member's N nearest lie within d + 2·rad of c (triangle inequality); margin for rounding.
+            let r = (d + 2.0 * rad) * (1.0 + 1e-5) + f32::MIN_POSITIVE;
+            let within = tree.query(&c.to_array()).within::<SquaredEuclidean<f32>>(r * r).unsorted().execute();
+            if within.len() > GROUP_CAP {
+                return None;
+            }
+            keys.extend(within.iter().map(|r| by_centre(self.ids[r.item as usize])));
+        }
+        keys.sort_unstable();
+        out.extend(keys.iter().map(|&k| {
+            let (dc, id) = unkey(k);
+            Cand { p: self.points[id as usize].0, dc, id }
+        }));
+        Some(c)
+    }
+
+    /// Steps 2–5 on the N nearest (`ranked`: packed (d², id), any order), ordering through packed
+    /// (Dist, id) keys in `keys` (scratch).
+    fn finish(&self, ranked: &[u64], n: Vec3A, keys: &mut Vec<u64>, out: &mut Vec<Neighbour>) {
+        out.clear();
+        keys.clear();
+        let dist = |d2: f32, dot: f32| d2.sqrt() + self.lambda * (1.0 - dot).max(0.0).sqrt();
+        // Step 2 (normal filter); step 5 falls back to all N candidates when it keeps none.
+        for &k in ranked {
+            let (d2, id) = unkey(k);
+            let dot = self.points[id as usize].1.dot(n);
+            if dot >= self.cos_max {
+                keys.push(key(dist(d2, dot), id));
+            }
+        }
+        if keys.is_empty() {
+            keys.extend(ranked.iter().map(|&k| {
+                let (d2, id) = unkey(k);
+                key(dist(d2, self.points[id as usize].1.dot(n)), id)
+            }));
+        }
+        // Dist ≥ 0, so (Dist, id) packs into an ordered key; N is small, a plain sort beats a selection.
+        keys.sort_unstable();
+        out.extend(keys.iter().take(self.lookup.keep).map(|&k| {
+            let (dist, id) = unkey(k);
+            Neighbour { id, dist }
+        }));
+    }
+
+    /// The N nearest caches to `p` as packed (d², id) keys, ranked. One tree query of N + 1; only when the
+    /// N-th and (N+1)-th distances are within rounding of each other (coincident or symmetric caches) a
+    /// radius query gathers every cache at that distance, so the set never depends on the tree layout.
+    fn nearest(&self, tree: &ImmutableKdTree<f32, 3>, p: Vec3A) -> Vec<u64> {
+        let q = p.to_array();
+        let k = self.lookup.candidates.min(self.ids.len());
+        let Some(k1) = NonZeroUsize::new((k + 1).min(self.ids.len())) else { return Vec::new() };
+        let keyed = |r: &kiddo::QueryResultItem<(), u32, f32>| {
+            let id = self.ids[r.item as usize];
+            key(self.d2(id, p), id)
+        };
+        let mut ranked: Vec<u64> =
+            tree.query(&q).nearest_n::<SquaredEuclidean<f32>>(k1).execute().iter().map(keyed).collect();
+        ranked.sort_unstable();
+        let gap = ranked.len() <= k || unkey(ranked[k]).0 > unkey(ranked[k - 1]).0 * (1.0 + 1e-5) + f32::MIN_POSITIVE;
+        if !gap {
+            let radius = unkey(ranked[k - 1]).0 * (1.0 + 2e-5) + f32::MIN_POSITIVE;
+            ranked = tree.query(&q).within::<SquaredEuclidean<f32>>(radius).execute().iter().map(keyed).collect();
+        }
+        top_k(&mut ranked, k);
+        ranked
     }
 
     /// Normalised interpolation weights for a selection (ALGORITHMS.md §5 step 6): w_i = 1/Dist_i divided by
@@ -411,6 +597,55 @@ mod tests {
         assert_eq!(w, vec![(1, 1.0)], "within 1e-7·L of cache 1");
         index.interpolate_weights(&[], &mut w);
         assert!(w.is_empty());
+    }
+
+    /// Checks `select_group` against `select` query by query.
+    fn group_matches_single(index: &CacheIndex, queries: &[(Vec3A, Vec3A)]) {
+        let mut single = Vec::new();
+        let mut calls = 0;
+        index.select_group(queries, |i, got| {
+            assert_eq!(i, calls, "queries answered out of order");
+            calls += 1;
+            index.select(queries[i].0, queries[i].1, &mut single);
+            assert_eq!(got, &single[..], "query {i} at {}", queries[i].0);
+        });
+        assert_eq!(calls, queries.len());
+    }
+
+    #[test]
+    fn group_selection_equals_single_selection() {
+        let mut r = Rng::keyed(SEED, 4, 0);
+        for &count in &[3usize, 150, 5000, 40_000] {
+            let caches = random_caches(&mut r, count);
+            let index = CacheIndex::new(&caches, LookupParams::default(), 0.3);
+            for spread in [0.0, 0.002, 0.02, 0.3] {
+                let c = Vec3A::new(r.uniform(), r.uniform(), r.uniform());
+                let queries: Vec<(Vec3A, Vec3A)> = (0..16)
+                    .map(|_| {
+                        let p = c + spread * Vec3A::new(r.uniform() - 0.5, r.uniform() - 0.5, r.uniform() - 0.5);
+                        (p, (Vec3A::Z + random_unit(&mut r)).normalize())
+                    })
+                    .collect();
+                group_matches_single(&index, &queries);
+            }
+        }
+    }
+
+    #[test]
+    fn group_selection_handles_ties_and_bad_queries() {
+        let mut caches = vec![(Vec3A::new(0.5, 0.5, 0.5), Vec3A::Z); 1000];
+        let mut r = Rng::keyed(SEED, 5, 0);
+        caches.extend(random_caches(&mut r, 2000));
+        let index = CacheIndex::new(&caches, LookupParams::default(), 0.3);
+        let mut queries: Vec<(Vec3A, Vec3A)> =
+            (0..12).map(|i| (Vec3A::new(0.5 + 0.001 * i as f32, 0.5, 0.5), Vec3A::Z)).collect();
+        queries.push((Vec3A::NAN, Vec3A::Z));
+        queries.push((Vec3A::new(0.5, 0.5, 0.5), Vec3A::new(f32::NAN, 0.0, 0.0)));
+        group_matches_single(&index, &queries);
+        // A group straddling distant points (a depth edge) is split, still matching.
+        let far: Vec<(Vec3A, Vec3A)> =
+            (0..8).map(|i| (Vec3A::splat(if i % 2 == 0 { 0.05 } else { 0.95 }), Vec3A::Z)).collect();
+        group_matches_single(&index, &far);
     }
 
     #[test]

@@ -169,6 +169,7 @@ impl AdaptivePlacement for AdaptiveSampling {
         params: &PlacementParams,
         seed: u64,
     ) -> Result<AdaptiveInfo> {
+        super::budget::check_gbuffer(g)?;
         if budget == 0 {
             return Ok(AdaptiveInfo::default());
         }

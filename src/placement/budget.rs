@@ -6,6 +6,7 @@
 
 use super::points::{self, Pt};
 use super::{Clusters, PlacementInfo, SplitRule, Stage1};
+use crate::error::{Error, Result};
 use crate::gbuffer::{GBuffer, PixelId};
 use crate::sampling::Rng;
 
@@ -18,14 +19,25 @@ pub(crate) enum Prelude {
     Go(Vec<Pt>, Vec<String>),
 }
 
+/// Refuses a G-buffer whose point count does not match its size (placement indexes pixels by (x, y)).
+pub(crate) fn check_gbuffer(g: &GBuffer) -> Result<()> {
+    match g.width.checked_mul(g.height) {
+        Some(n) if n == g.points.len() && n <= PixelId::MAX as usize => Ok(()),
+        _ => Err(Error::usage(format!(
+            "placement: the G-buffer holds {} shading points for {}×{} pixels",
+            g.points.len(),
+            g.width,
+            g.height
+        ))),
+    }
+}
+
+/// A strategy's split rule for a set of points.
+pub(crate) type RuleOf<'a> = &'a dyn Fn(&[Pt]) -> SplitRule;
+
 /// The checks every first stage starts with. `rule` gives the strategy's split rule for its points
 /// (singleton clusters are reported with it when every pixel becomes a site).
-pub(crate) fn prelude(
-    g: &GBuffer,
-    budget: usize,
-    meters_per_unit: f32,
-    rule: Option<&dyn Fn(&[Pt]) -> SplitRule>,
-) -> Prelude {
+pub(crate) fn prelude(g: &GBuffer, budget: usize, meters_per_unit: f32, rule: Option<RuleOf<'_>>) -> Prelude {
     let pts = points::collect(g, meters_per_unit);
     let mut notes = Vec::new();
     if pts.len() < g.valid_count {
@@ -82,6 +94,22 @@ pub(crate) fn free_usable(g: &GBuffer, taken: &[bool]) -> Vec<PixelId> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_g_buffer_of_the_wrong_size_is_refused_by_every_strategy() {
+        let mut g = crate::placement::test_scenes::flat(8, 8);
+        g.points.pop();
+        assert!(check_gbuffer(&g).is_err());
+        for name in crate::placement::registry::NAMES {
+            let s = crate::placement::registry::strategy(name).unwrap();
+            let e = s.initial.place(&g, 5, &Default::default(), 1).unwrap_err();
+            assert!(e.to_string().contains("8×8"), "{name}: {e}");
+            if let Some(a) = &s.adaptive {
+                let mut o = crate::placement::test_scenes::MaskOracle::new(&g, &[]);
+                assert!(a.place(&g, &Default::default(), &mut o, 5, &Default::default(), 1).is_err(), "{name}");
+            }
+        }
+    }
 
     #[test]
     fn uniform_picks_are_distinct_and_seeded() {

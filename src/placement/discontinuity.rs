@@ -23,12 +23,14 @@ const STAGE_DRAW: u64 = 0x4447_0001;
 const STAGE_FALLBACK: u64 = 0x4447_0002;
 /// Rows per parallel band when gathering neighbour sets.
 const BAND: usize = 8;
+/// Side of the pixel tiles whose selections share one candidate list ([`CacheIndex::select_group`]).
+const TILE: usize = 8;
 
 /// DGS — discontinuity-guided sampling.
 ///
 /// | option | type | default | meaning |
 /// |---|---|---|---|
-/// | `terms` | Option<DgsTerms> | None | which terms form D; `None` takes `PlacementParams::dgs` (ablations `vgc+dgs:diff`, `vgc+dgs:geom` fix it) |
+/// | `terms` | `Option<DgsTerms>` | None | which terms form D; `None` takes `PlacementParams::dgs` (ablations `vgc+dgs:diff`, `vgc+dgs:geom` fix it) |
 /// | `PlacementParams::lookup` | LookupParams | N = 20, 30°, M = 6 | the §5 selection; its M is K, the caches compared per pixel (A9) |
 /// | `PlacementParams::dgs_window` | usize | 5 | side of the G window (Eq. 3) |
 ///
@@ -64,24 +66,49 @@ struct Band {
 }
 
 fn gather_band(g: &GBuffer, index: &CacheIndex, rows: std::ops::Range<usize>) -> Band {
+    let k = index.lookup().keep;
+    let (y0, nrows) = (rows.start, rows.len());
+    // Per pixel of the band: its selection (sorted ids, padded with u32::MAX), found tile by tile.
+    let mut sel = vec![u32::MAX; g.width * nrows * k];
+    let mut lens = vec![0usize; g.width * nrows];
+    let mut queries = Vec::with_capacity(TILE * TILE);
+    let mut where_ = Vec::with_capacity(TILE * TILE);
+    for tx in (0..g.width).step_by(TILE) {
+        for ty in (0..nrows).step_by(TILE) {
+            queries.clear();
+            where_.clear();
+            for y in ty..(ty + TILE).min(nrows) {
+                for x in tx..(tx + TILE).min(g.width) {
+                    if let Some(q) = g.get(g.id(x, y0 + y)).and_then(|sp| usable_normal(sp).map(|n| (sp.p, n))) {
+                        queries.push(q);
+                        where_.push(y * g.width + x);
+                    }
+                }
+            }
+            index.select_group(&queries, |i, near| {
+                let at = where_[i];
+                let slot = &mut sel[at * k..(at + 1) * k];
+                for (s, nb) in slot.iter_mut().zip(near) {
+                    *s = nb.id;
+                }
+                slot[..near.len()].sort_unstable();
+                lens[at] = near.len();
+            });
+        }
+    }
     let mut b = Band { off: vec![0], ..Default::default() };
-    let mut near = Vec::new();
-    let mut set: Vec<u32> = Vec::new();
-    for y in rows {
+    for y in 0..nrows {
         let mut prev: Option<u32> = None;
         for x in 0..g.width {
-            let Some((p, n)) = g.get(g.id(x, y)).and_then(|sp| usable_normal(sp).map(|n| (sp.p, n))) else {
+            let at = y * g.width + x;
+            if !where_valid(g, x, y0 + y) {
                 b.pixel_set.push(u32::MAX);
                 prev = None;
                 continue;
-            };
-            index.select(p, n, &mut near);
-            set.clear();
-            set.extend(near.iter().map(|nb| nb.id));
-            set.sort_unstable();
+            }
+            let set = &sel[at * k..at * k + lens[at]];
             // Neighbouring pixels usually blend the same caches: reuse the previous pixel's set.
-            if let Some(s) =
-                prev.filter(|&s| b.ids[b.off[s as usize] as usize..b.off[s as usize + 1] as usize] == set[..])
+            if let Some(s) = prev.filter(|&s| &b.ids[b.off[s as usize] as usize..b.off[s as usize + 1] as usize] == set)
             {
                 b.pixel_set.push(s);
                 continue;
@@ -90,7 +117,7 @@ fn gather_band(g: &GBuffer, index: &CacheIndex, rows: std::ops::Range<usize>) ->
             for (i, &a) in set.iter().enumerate() {
                 b.pairs.extend(set[i + 1..].iter().map(|&c| ((a as u64) << 32) | c as u64));
             }
-            b.ids.extend_from_slice(&set);
+            b.ids.extend_from_slice(set);
             b.off.push(b.ids.len() as u32);
             b.pixel_set.push(s);
             prev = Some(s);
@@ -99,6 +126,11 @@ fn gather_band(g: &GBuffer, index: &CacheIndex, rows: std::ops::Range<usize>) ->
     b.pairs.sort_unstable();
     b.pairs.dedup();
     b
+}
+
+/// Whether pixel (x, y) takes part in the map.
+fn where_valid(g: &GBuffer, x: usize, y: usize) -> bool {
+    g.get(g.id(x, y)).and_then(usable_normal).is_some()
 }
 
 /// Distinct pairs with their differences, indexed by first cache (CSR) for lookups.
@@ -175,28 +207,36 @@ fn band_terms(b: &Band, table: &PairTable) -> (Vec<f32>, Vec<f32>) {
     b.pixel_set.iter().map(|&s| set_terms.get(s as usize).copied().unwrap_or((0.0, 0.0))).unzip()
 }
 
-/// G(s) = Σ_{q in the window, q usable, q ≠ s} (1 − n_s·n_q) (Eq. 3); 0 for unusable pixels.
+/// G(s) = Σ_{q in the window, q usable, q ≠ s} (1 − n_s·n_q) (Eq. 3); 0 for unusable pixels. Rows in
+/// parallel; unusable pixels carry a zero normal and weight 0.
 fn geometry_term(g: &GBuffer, window: usize) -> Vec<f32> {
-    let r = (window.max(1) / 2) as isize;
-    let normals: Vec<Option<Vec3A>> = g.points.par_iter().map(|sp| sp.as_ref().and_then(usable_normal)).collect();
-    (0..g.width * g.height)
-        .into_par_iter()
-        .map(|i| {
-            let Some(ns) = normals[i] else { return 0.0 };
-            let (x, y) = ((i % g.width) as isize, (i / g.width) as isize);
+    let r = window.max(1) / 2;
+    let (w, h) = (g.width, g.height);
+    let normals: Vec<(Vec3A, f32)> = g
+        .points
+        .par_iter()
+        .map(|sp| sp.as_ref().and_then(usable_normal).map_or((Vec3A::ZERO, 0.0), |n| (n, 1.0)))
+        .collect();
+    let mut out = vec![0f32; w * h];
+    out.par_chunks_mut(w.max(1)).enumerate().for_each(|(y, row)| {
+        let (y0, y1) = (y.saturating_sub(r), (y + r).min(h - 1));
+        for (x, o) in row.iter_mut().enumerate() {
+            let (ns, ws) = normals[y * w + x];
+            if ws == 0.0 {
+                continue;
+            }
+            let (x0, x1) = (x.saturating_sub(r), (x + r).min(w - 1));
             let mut sum = 0.0;
-            for qy in (y - r).max(0)..=(y + r).min(g.height as isize - 1) {
-                for qx in (x - r).max(0)..=(x + r).min(g.width as isize - 1) {
-                    if (qx, qy) != (x, y) {
-                        if let Some(nq) = normals[qy as usize * g.width + qx as usize] {
-                            sum += 1.0 - ns.dot(nq);
-                        }
-                    }
+            for qy in y0..=y1 {
+                for &(nq, wq) in &normals[qy * w + x0..=qy * w + x1] {
+                    sum += wq * (1.0 - ns.dot(nq));
                 }
             }
-            sum
-        })
-        .collect()
+            // The pixel itself is in the window: take its own term back out.
+            *o = (sum - (1.0 - ns.dot(ns))).max(0.0);
+        }
+    });
+    out
 }
 
 /// Min–max normalisation to [0, 1] over the pixels where `mask` is set (A11); 0 when max = min.
@@ -289,6 +329,7 @@ impl AdaptivePlacement for Discontinuity {
         params: &PlacementParams,
         seed: u64,
     ) -> Result<AdaptiveInfo> {
+        super::budget::check_gbuffer(g)?;
         if budget == 0 {
             return Ok(AdaptiveInfo::default());
         }
@@ -353,6 +394,29 @@ mod tests {
         };
         let (at, away) = (mean(&near), mean(&|i| g.points[i].is_some() && !near(i)));
         assert!(at > 5.0 * away, "{at} vs {away}");
+    }
+
+    #[test]
+    fn the_geometry_term_is_eq3_over_the_window() {
+        let g = ts::nan_normals(23, 17);
+        let geo = geometry_term(&g, 5);
+        for y in 0..17usize {
+            for x in 0..23usize {
+                let n = |x: usize, y: usize| g.get(g.id(x, y)).and_then(usable_normal);
+                let want = n(x, y).map_or(0.0, |ns| {
+                    let mut sum = 0.0;
+                    for qy in y.saturating_sub(2)..=(y + 2).min(16) {
+                        for qx in x.saturating_sub(2)..=(x + 2).min(22) {
+                            if (qx, qy) != (x, y) {
+                                sum += n(qx, qy).map_or(0.0, |nq| 1.0 - ns.dot(nq));
+                            }
+                        }
+                    }
+                    sum
+                });
+                assert!((geo[y * 23 + x] - want).abs() < 1e-4, "({x}, {y}): {} vs {want}", geo[y * 23 + x]);
+            }
+        }
     }
 
     #[test]

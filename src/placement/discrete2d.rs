@@ -58,7 +58,7 @@ impl Discrete2D {
     /// marginal, then a column by the row's conditional. `None` when the total is 0.
     pub fn sample(&self, u0: f32, u1: f32) -> Option<(usize, usize)> {
         let total = self.total();
-        if !(total > 0.0) {
+        if total.is_nan() || total <= 0.0 {
             return None;
         }
         let y = pick(&self.marginal, u0 as f64 * total)?;

@@ -23,13 +23,15 @@ pub(crate) struct Node {
     pub right: u32,
     /// Stop key: the node is a cut leaf at threshold t when key ≤ t.
     pub key: f32,
+    /// A second per-node value the rule may record (VGC: a bound of the normal spread).
+    pub aux: f32,
 }
 
 /// How a hierarchy measures and splits a node.
 pub(crate) trait NodeRule: Sync {
-    /// Computes the node's key and, when it can have children, partitions it and returns the size of the
-    /// left part (in 1..len).
-    fn process(&self, pts: &mut [Pt]) -> (f32, Option<usize>);
+    /// Computes the node's key and auxiliary value and, when it can have children, partitions it and
+    /// returns the size of the left part (in 1..len).
+    fn process(&self, pts: &mut [Pt]) -> (f32, f32, Option<usize>);
 }
 
 /// Nodes bigger than this are built / walked in parallel.
@@ -114,8 +116,8 @@ fn build_par(pts: &mut [Pt], start: u32, rule: &impl NodeRule, depth: u32) -> Ve
         return out;
     }
     let len = pts.len();
-    let (key, split) = rule.process(pts);
-    let mut out = vec![Node { start, len: len as u32, right: 0, key }];
+    let (key, aux, split) = rule.process(pts);
+    let mut out = vec![Node { start, len: len as u32, right: 0, key, aux }];
     if let Some(m) = split {
         let (a, b) = pts.split_at_mut(m);
         let (l, r) =
@@ -137,8 +139,8 @@ fn build_seq(pts: &mut [Pt], start: u32, rule: &impl NodeRule, out: &mut Vec<Nod
         if let Some(p) = parent {
             out[p].right = (me - p) as u32;
         }
-        let (key, split) = rule.process(&mut pts[off..off + len]);
-        out.push(Node { start: start + off as u32, len: len as u32, right: 0, key });
+        let (key, aux, split) = rule.process(&mut pts[off..off + len]);
+        out.push(Node { start: start + off as u32, len: len as u32, right: 0, key, aux });
         if let Some(m) = split {
             // Right first so the left subtree is emitted next (pre-order); a node's `right` stays 0 until its
             // right child is popped, which is after its whole left subtree.
@@ -158,10 +160,10 @@ mod tests {
     /// Key = longest side; split at its midpoint.
     struct Longest;
     impl NodeRule for Longest {
-        fn process(&self, pts: &mut [Pt]) -> (f32, Option<usize>) {
+        fn process(&self, pts: &mut [Pt]) -> (f32, f32, Option<usize>) {
             let (lo, hi, _) = spatial_stats(pts);
             let key = (hi - lo).max_element();
-            (key, if key > 0.0 { split_spatial(pts, lo, hi) } else { None })
+            (key, 0.0, if key > 0.0 { split_spatial(pts, lo, hi) } else { None })
         }
     }
 

@@ -39,6 +39,7 @@ fn grid(w: usize, h: usize, g_cells: usize) -> (usize, usize) {
 
 impl InitialPlacement for ImageUniform {
     fn place(&self, g: &GBuffer, budget: usize, params: &PlacementParams, seed: u64) -> Result<Stage1> {
+        budget::check_gbuffer(g)?;
         let (usable_count, notes) = match budget::prelude(g, budget, params.meters_per_unit, None) {
             Prelude::Done(s) => return Ok(s),
             Prelude::Go(pts, notes) => (pts.len(), notes),

@@ -5,6 +5,20 @@
 //!
 //! Strategy names (what users type and reports print) are resolved by [`registry::strategy`].
 //! Depends on `gbuffer`, `cache` (the §5 neighbour selection) and `sampling`; never on `render` or `scene`.
+//!
+//! | file | what |
+//! |---|---|
+//! | [`image_uniform`] | IM, jittered-stratified image-space sampling (ALGORITHMS.md §4.1) |
+//! | [`spatial_directional`] | SD, LightSlice's 6-D BVH with a threshold search (§4.2) |
+//! | [`view_guided`] | VGC, the paper's first stage, Eq. 1–2 with a σ_s search (§4.4) |
+//! | [`adaptive`] | AS, neighbour-error insertion after SD or VGC (§4.3, a reconstruction) |
+//! | [`discontinuity`] | DGS, the paper's second stage, Eq. 3–4 (§4.5) |
+//! | [`registry`] | the strategy names |
+//! | `points`, `split`, `hierarchy`, `search`, `cluster`, `budget`, `discrete2d` | shared machinery: usable points and Eq. 1 scaling, node splits, the build-once hierarchy and its cut, the log-scale budget search, representatives and exact budgets, common budget cases, the 2-D sampler |
+//!
+//! Every random decision uses `Rng::keyed(seed, stage tag, index)` with the index of a cell, cluster, cache
+//! or draw — never a thread — and every parallel step combines its results in index order, so the same seed
+//! gives the same caches for any thread count.
 
 pub mod adaptive;
 pub mod discontinuity;
@@ -22,6 +36,8 @@ mod search;
 mod split;
 #[cfg(test)]
 mod test_scenes;
+#[cfg(test)]
+mod timing;
 
 pub use adaptive::AdaptiveSampling;
 pub use discontinuity::Discontinuity;
@@ -108,7 +124,7 @@ pub trait CacheOracle {
     }
     /// The pixel a cache sits on.
     fn site(&self, c: CacheId) -> PixelId;
-    /// Σ_k |g_a[k] − g_b[k]| over corresponding gathering samples (AO: Hamming distance of masks).
+    /// Σ_k |g_a\[k\] − g_b\[k\]| over corresponding gathering samples (AO: Hamming distance of masks).
     fn diff(&self, a: CacheId, b: CacheId) -> f32;
     /// Many differences at once (implementations may run them in parallel); same order as `pairs`.
     fn diff_many(&self, pairs: &[(CacheId, CacheId)]) -> Vec<f32> {

@@ -109,11 +109,6 @@ impl DepthScale {
         if pts.is_empty() { DepthScale::new(0.0, 0.0, gamma) } else { DepthScale::new(lo, hi, gamma) }
     }
 
-    /// α = 1 + Γ(d_max − d_min).
-    pub fn alpha(&self) -> f32 {
-        1.0 + self.alpha_minus_1
-    }
-
     /// The factor 1 + (α − 1)·D² for a node of (mean) depth `d`; D is clamped to [0, 1].
     #[inline]
     pub fn factor(&self, d: f32) -> f32 {
@@ -130,9 +125,9 @@ mod tests {
     fn eq1_endpoints_and_monotone() {
         // Depths 2 m … 12 m, Γ = 0.2 ⇒ α = 3.
         let s = DepthScale::new(2.0, 12.0, 0.2);
-        assert!((s.alpha() - 3.0).abs() < 1e-6);
         assert_eq!(s.factor(2.0), 1.0, "σ at d_min");
-        assert!((s.factor(12.0) - s.alpha()).abs() < 1e-6, "α·σ at d_max");
+        assert!((s.factor(12.0) - 3.0).abs() < 1e-6, "α·σ at d_max");
+        assert_eq!(s.factor(20.0), s.factor(12.0), "clamped beyond d_max");
         let mut prev = 0.0;
         for i in 0..=100 {
             let f = s.factor(2.0 + 0.1 * i as f32);

@@ -25,7 +25,7 @@ const STAGE_REP: u64 = 0x5344_0001;
 /// |---|---|---|---|
 /// | `PlacementParams::sd_min_size` | usize | 10 | S_min: a node with fewer points is a leaf (Fig. 1 shows 10 and 50) |
 ///
-/// The normal scale s is the mean of the three extents of the shading points' box / 8 [LS]; the threshold T
+/// The normal scale s is the mean of the three extents of the shading points' box / 8 (\[LS\]); the threshold T
 /// is searched in [1e-6·L, 4·L] on a log scale (reported in `PlacementInfo::sd_threshold`). When S_min makes
 /// the count saturate below the budget, the largest leaves are split further to meet it (with a note).
 /// Forms clusters with [`SplitRule::SpatialDirectional`].
@@ -39,11 +39,11 @@ struct SdRule {
 }
 
 impl NodeRule for SdRule {
-    fn process(&self, pts: &mut [Pt]) -> (f32, Option<usize>) {
+    fn process(&self, pts: &mut [Pt]) -> (f32, f32, Option<usize>) {
         let (lo, hi) = sd_bounds(pts, self.s);
         let (extent, _) = sd_extent(&lo, &hi);
         let split = if pts.len() >= self.min_size && extent > 0.0 { split_sd(pts, self.s, &lo, &hi) } else { None };
-        (extent, split)
+        (extent, 0.0, split)
     }
 }
 
@@ -56,6 +56,7 @@ fn normal_scale(pts: &[Pt]) -> f32 {
 
 impl InitialPlacement for SpatialDirectional {
     fn place(&self, g: &GBuffer, budget: usize, params: &PlacementParams, seed: u64) -> Result<Stage1> {
+        budget::check_gbuffer(g)?;
         let rule_of = |pts: &[Pt]| SplitRule::SpatialDirectional { normal_scale: normal_scale(pts) };
         let (mut pts, mut notes) = match budget::prelude(g, budget, params.meters_per_unit, Some(&rule_of)) {
             Prelude::Done(s) => return Ok(s),

@@ -49,15 +49,44 @@ pub(crate) fn split_at(pts: &mut [Pt], key: impl Fn(&Pt) -> f32, value: f32) -> 
 
 /// Tight box of positions and the sum of depths of a node (one pass).
 pub(crate) fn spatial_stats(pts: &[Pt]) -> (Vec3A, Vec3A, f32) {
-    let mut lo = Vec3A::splat(f32::INFINITY);
-    let mut hi = Vec3A::splat(f32::NEG_INFINITY);
+    let s = node_stats(pts);
+    (s.lo, s.hi, s.depth_sum)
+}
+
+/// One pass over a node: position box, normal box and depth sum.
+pub(crate) struct NodeStats {
+    pub lo: Vec3A,
+    pub hi: Vec3A,
+    pub n_lo: Vec3A,
+    pub n_hi: Vec3A,
+    pub depth_sum: f32,
+}
+
+/// Position box, normal box and depth sum of a node.
+pub(crate) fn node_stats(pts: &[Pt]) -> NodeStats {
+    let inf = Vec3A::splat(f32::INFINITY);
+    let mut s = NodeStats { lo: inf, hi: -inf, n_lo: inf, n_hi: -inf, depth_sum: 0.0 };
     let mut depth = 0f64;
     for q in pts {
-        lo = lo.min(q.pos());
-        hi = hi.max(q.pos());
+        s.lo = s.lo.min(q.pos());
+        s.hi = s.hi.max(q.pos());
+        s.n_lo = s.n_lo.min(q.normal());
+        s.n_hi = s.n_hi.max(q.normal());
         depth += q.depth as f64;
     }
-    (lo, hi, depth as f32)
+    s.depth_sum = depth as f32;
+    s
+}
+
+/// An upper bound, in degrees, of the cone spread ([`cone_spread`]) of unit normals inside a box: any two
+/// differ by at most its diagonal δ, so by an angle ≤ 2·asin(δ/2); every normal is within that angle of the
+/// mean normal, so the spread (twice the largest angle to the mean) is ≤ 4·asin(δ/2).
+pub(crate) fn cone_spread_bound(n_lo: Vec3A, n_hi: Vec3A) -> f32 {
+    let delta = (n_hi - n_lo).length();
+    if !delta.is_finite() {
+        return f32::INFINITY;
+    }
+    4.0 * (0.5 * delta).min(1.0).asin().to_degrees()
 }
 
 /// Index of the largest component (first on ties).
@@ -149,17 +178,17 @@ impl Angular {
         if pts.len() < 2 {
             return false;
         }
-        let depth = pts.iter().map(|q| q.depth as f64).sum::<f64>() / pts.len() as f64;
-        let limit = self.sigma_a * self.scale.factor(depth as f32);
-        let (lo, hi) = normal_bounds(pts);
-        if lo == hi {
+        let st = node_stats(pts);
+        let limit = self.sigma_a * self.scale.factor(st.depth_sum / pts.len() as f32);
+        if st.n_lo == st.n_hi {
             return false;
         }
         if self.spherical {
             let (a, b) = sph_bounds(pts);
             (b[0] - a[0]).max(b[1] - a[1]) > limit
         } else {
-            cone_spread(pts) > limit
+            // The box bound settles flat nodes in this one pass; only curved ones need the exact spread.
+            cone_spread_bound(st.n_lo, st.n_hi) > limit && cone_spread(pts) > limit
         }
     }
 
@@ -198,7 +227,7 @@ fn sph_bounds(pts: &[Pt]) -> ([f32; 2], [f32; 2]) {
 pub(crate) fn cone_spread(pts: &[Pt]) -> f32 {
     let sum: Vec3A = pts.iter().map(|q| q.normal()).sum();
     let len = sum.length();
-    if !(len > 1e-6 * pts.len() as f32) {
+    if len.is_nan() || len <= 1e-6 * pts.len() as f32 {
         return 360.0;
     }
     let mean = sum / len;

@@ -14,10 +14,10 @@ use rayon::prelude::*;
 
 use super::budget::{self, Prelude};
 use super::cluster::{self, Representative};
-use super::hierarchy::{Hierarchy, NodeRule};
+use super::hierarchy::{Hierarchy, Node, NodeRule};
 use super::points::{self, DepthScale, Pt};
 use super::search::search_log;
-use super::split::{Angular, spatial_stats, split_spatial};
+use super::split::{Angular, cone_spread_bound, node_stats, split_spatial};
 use super::{AngularMode, InitialPlacement, PlacementInfo, PlacementParams, SplitRule, Stage1};
 use crate::error::{Error, Result};
 use crate::gbuffer::GBuffer;
@@ -32,11 +32,11 @@ const SIGMA_S_MIN: f32 = 1e-5;
 /// | option | type | default | meaning |
 /// |---|---|---|---|
 /// | `two_stage` | bool | false | the budget is stage 1's share of a two-stage total: σ_a is chosen for N1/(1 − R) caches |
-/// | `PlacementParams::sigma_a_deg` | Option<f32> | 15° at 120K … 25° at 25K | σ_a, the angular threshold |
+/// | `PlacementParams::sigma_a_deg` | `Option<f32>` | 15° at 120K … 25° at 25K | σ_a, the angular threshold |
 /// | `PlacementParams::gamma` | f32 | 0.2 | Γ of Eq. 1, per metre |
 /// | `PlacementParams::meters_per_unit` | f32 | 1 | scene units → metres for depths |
 /// | `PlacementParams::angular` | AngularMode | Cone | how normal spread is measured and split (A4) |
-/// | `PlacementParams::lambda` | Option<f32> | 0.5/L | λ of Eq. 2 |
+/// | `PlacementParams::lambda` | `Option<f32>` | 0.5/L | λ of Eq. 2 |
 /// | `PlacementParams::jitter` | f32 | 0.2 | jitter of the mean, fraction of the cluster extent (A6) |
 ///
 /// σ_s is searched in [1e-5·L, L] until the count is within 0.2 % of the budget (or 40 steps); the final
@@ -50,18 +50,22 @@ pub struct ViewGuided {
 }
 
 /// The spatial pass's node rule: key = longest side / Eq. 1 factor of the node's mean depth, so the node
-/// stops when longest side ≤ σ_s′ ⇔ key ≤ σ_s.
+/// stops when longest side ≤ σ_s′ ⇔ key ≤ σ_s. The auxiliary value is a bound of the node's cone spread
+/// divided by the same factor (cone mode; +∞ in the literal mode): when it is ≤ σ_a the node is one
+/// angular cluster without looking at its points again.
 struct SpatialRule {
     scale: DepthScale,
+    cone: bool,
 }
 
 impl NodeRule for SpatialRule {
-    fn process(&self, pts: &mut [Pt]) -> (f32, Option<usize>) {
-        let (lo, hi, depth_sum) = spatial_stats(pts);
-        let longest = (hi - lo).max_element();
-        let key = longest / self.scale.factor(depth_sum / pts.len() as f32);
-        let split = if pts.len() > 1 && longest > 0.0 { split_spatial(pts, lo, hi) } else { None };
-        (key, split)
+    fn process(&self, pts: &mut [Pt]) -> (f32, f32, Option<usize>) {
+        let st = node_stats(pts);
+        let longest = (st.hi - st.lo).max_element();
+        let f = self.scale.factor(st.depth_sum / pts.len() as f32);
+        let flat = if self.cone { cone_spread_bound(st.n_lo, st.n_hi) / f } else { f32::INFINITY };
+        let split = if pts.len() > 1 && longest > 0.0 { split_spatial(pts, st.lo, st.hi) } else { None };
+        (longest / f, flat, split)
     }
 }
 
@@ -107,6 +111,7 @@ impl ViewGuided {
 
 impl InitialPlacement for ViewGuided {
     fn place(&self, g: &GBuffer, budget: usize, params: &PlacementParams, seed: u64) -> Result<Stage1> {
+        budget::check_gbuffer(g)?;
         let rule = SplitRule::ViewGuided;
         let (mut pts, notes) = match budget::prelude(g, budget, params.meters_per_unit, Some(&|_: &[Pt]| rule)) {
             Prelude::Done(s) => return Ok(s),
@@ -118,11 +123,14 @@ impl InitialPlacement for ViewGuided {
         }
         let scale = DepthScale::of(&pts, params.gamma);
         let angular = Angular { spherical: params.angular == AngularMode::SphericalAngles, sigma_a, scale };
-        let h = Hierarchy::build(&mut pts, &SpatialRule { scale });
+        let h = Hierarchy::build(&mut pts, &SpatialRule { scale, cone: !angular.spherical });
         let l = points::length_scale(g, &pts);
         // Angular cluster count per spatial node, computed at most once (0 = not yet known).
         let memo: Vec<AtomicU32> = (0..h.nodes.len()).map(|_| AtomicU32::new(0)).collect();
         let weight = |i: usize| {
+            if h.nodes[i].aux <= sigma_a {
+                return 1;
+            }
             let known = memo[i].load(Ordering::Relaxed);
             if known > 0 {
                 return known as usize;
@@ -161,18 +169,22 @@ impl InitialPlacement for ViewGuided {
 /// leaves, results in leaf order).
 fn final_clusters(pts: &mut [Pt], h: &Hierarchy, sigma_s: f32, angular: &Angular) -> Vec<Range<u32>> {
     let leaves = h.cut(sigma_s);
-    let mut chunks: Vec<(u32, &mut [Pt])> = Vec::with_capacity(leaves.len());
+    let mut chunks: Vec<(&Node, &mut [Pt])> = Vec::with_capacity(leaves.len());
     let mut rest = pts;
     for &i in &leaves {
         let (a, b) = rest.split_at_mut(h.nodes[i].len as usize);
-        chunks.push((h.nodes[i].start, a));
+        chunks.push((&h.nodes[i], a));
         rest = b;
     }
     let per_leaf: Vec<Vec<Range<u32>>> = chunks
         .into_par_iter()
-        .map(|(base, chunk)| {
+        .map(|(node, chunk)| {
             let mut out = Vec::new();
-            angular_pass(chunk, base, angular, |r| out.push(r));
+            if node.aux <= angular.sigma_a {
+                out.push(node.start..node.start + node.len);
+            } else {
+                angular_pass(chunk, node.start, angular, |r| out.push(r));
+            }
             out
         })
         .collect();
@@ -208,7 +220,7 @@ mod tests {
         let mut pts = points::collect(&ts::staircase(96, 64), 1.0);
         let scale = DepthScale::of(&pts, 0.2);
         let angular = Angular { spherical: false, sigma_a: 20.0, scale };
-        let h = Hierarchy::build(&mut pts, &SpatialRule { scale });
+        let h = Hierarchy::build(&mut pts, &SpatialRule { scale, cone: true });
         let counts: Vec<usize> = (0..30)
             .map(|i| 20.0 * 0.7f32.powi(i))
             .map(|s| {
