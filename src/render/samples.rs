@@ -98,7 +98,7 @@ pub fn coherent_order(points: &mut [[f32; 2]], scratch: &mut Vec<([f32; 2], u32)
     let cell = |p: [f32; 2]| {
         let x = ((p[0] * k as f32) as u32).min(k - 1);
         let y = ((p[1] * k as f32) as u32).min(k - 1);
-        y * k + if y % 2 == 0 { x } else { k - 1 - x }
+        y * k + if y.is_multiple_of(2) { x } else { k - 1 - x }
     };
     scratch.clear();
     scratch.extend(points.iter().map(|&p| (p, cell(p))));
@@ -110,7 +110,7 @@ pub fn coherent_order(points: &mut [[f32; 2]], scratch: &mut Vec<([f32; 2], u32)
 }
 
 #[cfg(test)]
-mod coherent_tests {
+mod tests {
     use super::*;
 
     #[test]
@@ -132,8 +132,6 @@ mod coherent_tests {
         assert_eq!(before, after);
         assert!(step(&pts) < random_path / 4.0);
     }
-
-    use super::*;
 
     fn spec(kind: SamplerKind, spp: u32) -> SamplerSpec {
         SamplerSpec { name: String::new(), kind, spp, pow2_arrays: false }
