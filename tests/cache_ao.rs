@@ -1,12 +1,14 @@
 //! Behaviour of the `cacheao` integrator (issue 5): analytic answers, every placement converging, exact
 //! budgets, determinism, and bad or degenerate inputs giving a clear message or a sensible image.
 
+mod common;
+
 use std::path::Path;
 
 use cachert::Warnings;
 use cachert::image::Image;
 use cachert::render::{RenderOutput, RenderSettings, render};
-use cachert::scene::{LoadOptions, load_str};
+use cachert::scene::{LoadOptions, load, load_str};
 
 /// Every placement name, plus the per-sample reference.
 const PLACEMENTS: [&str; 9] = ["none", "im", "sd", "sd+as", "vgc", "vgc+dgs", "vgc+as", "vgc+dgs:diff", "vgc+dgs:geom"];
@@ -139,14 +141,10 @@ fn a_budget_of_zero_is_an_error_and_one_cache_renders() {
     let e = run(&sphere_scene(), &[("placement", "vgc+dgs"), ("caches", "0")], None).unwrap_err().to_string();
     assert!(e.contains("\"caches\" must be at least 1"), "{e}");
     for p in &PLACEMENTS[1..] {
-        match run(&sphere_scene(), &[("placement", p), ("caches", "1")], None) {
-            Ok(out) => assert_eq!(out.cache.unwrap().stats.total_caches, 1, "{p}"),
-            // VGC cannot meet a budget that its angular threshold alone exceeds: it must say so.
-            Err(e) => {
-                let e = e.to_string();
-                assert!(p.starts_with("vgc") && e.contains("σ_a") && e.contains("budget of 1"), "{p}: {e}");
-            }
-        }
+        // VGC's automatic σ_a is raised (with a note) when the budget is too small for it.
+        let out = run(&sphere_scene(), &[("placement", p), ("caches", "1")], None).unwrap();
+        assert_eq!(out.cache.unwrap().stats.total_caches, 1, "{p}");
+        assert!(out.image.pixels.iter().all(|px| px[0].is_finite() && px[0] >= 0.0), "{p}");
     }
 }
 
@@ -203,4 +201,67 @@ fn unknown_placements_and_parameters_are_errors_listing_the_valid_ones() {
     assert!(e.contains("vgc+foo") && e.contains("vgc+dgs:geom") && e.contains("none"), "{e}");
     let e = run(&sphere_scene(), &[("sdminsiz", "3")], None).unwrap_err().to_string();
     assert!(e.contains("sdminsiz") && e.contains("sdminsize"), "{e}");
+}
+
+#[test]
+fn nan_normals_from_a_ply_are_dropped_with_a_warning_and_the_image_is_finite() {
+    let dir = common::TempDir::new("nan-ply");
+    // A square at z = 0 whose second vertex normal is NaN.
+    dir.write(
+        "bad.ply",
+        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+         property float nx\nproperty float ny\nproperty float nz\nelement face 2\n\
+         property list uchar int vertex_indices\nend_header\n\
+         -100 -100 0 0 0 1\n100 -100 0 nan 0 1\n100 100 0 0 0 1\n-100 100 0 0 0 1\n3 0 1 2\n3 0 2 3\n",
+    );
+    let world = "Shape \"plymesh\" \"string filename\" \"bad.ply\"\nTranslate 0.5 -0.3 1.5\nShape \"sphere\" \"float radius\" 1";
+    let path = dir.write("s.pbrt", top_view(world));
+    let loaded = load(&path, LoadOptions::default()).unwrap();
+    assert!(loaded.warnings.iter().any(|w| w.msg.contains("NaN, infinite or zero")), "{:?}", loaded.warnings);
+    for p in ["none", "sd+as", "vgc+dgs"] {
+        let s = RenderSettings {
+            set: vec![("placement".into(), p.into()), ("caches".into(), "300".into())],
+            seed: 7,
+            ..Default::default()
+        };
+        let out = render(&loaded.scene, loaded.integrator.as_ref(), &s, &mut Warnings::default()).unwrap();
+        assert!(out.image.pixels.iter().all(|px| px.iter().all(|c| c.is_finite() && *c >= 0.0)), "{p}");
+        // The same plane as the analytic scene: the sphere's closed form still holds.
+        assert!(rmse_to_closed_form(&out.image).0 < 0.03, "{p}");
+    }
+}
+
+#[test]
+fn error_falls_as_caches_grow_on_the_shipped_room() {
+    // scenes/room.pbrt at 64×48, against the per-sample reference of the same gather.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/room.pbrt");
+    let loaded = load(&path, LoadOptions { resolution: Some([64, 48]), ..Default::default() }).unwrap();
+    let go = |p: &str, caches: &str| {
+        let s = RenderSettings {
+            integrator: Some("cacheao".into()),
+            set: vec![("placement".into(), p.into()), ("caches".into(), caches.into())],
+            seed: 3,
+            ..Default::default()
+        };
+        render(&loaded.scene, loaded.integrator.as_ref(), &s, &mut Warnings::default()).unwrap().image
+    };
+    let reference = go("none", "1");
+    for p in &PLACEMENTS[1..6] {
+        let errs: Vec<f64> =
+            ["60", "240", "960"].iter().map(|c| cachert::metrics::rmse(&go(p, c), &reference).unwrap()).collect();
+        assert!(errs[1] < errs[0] && errs[2] < errs[1], "{p}: {errs:?}");
+    }
+}
+
+#[test]
+fn the_documented_parameter_table_is_exactly_what_cacheao_reads() {
+    let e = run(&sphere_scene(), &[("zzz", "1")], None).unwrap_err().to_string();
+    let (_, list) = e.split_once("it reads: ").unwrap_or_else(|| panic!("{e}"));
+    let mut read: Vec<&str> = list.trim_end_matches(')').split(", ").collect();
+    let mut documented: Vec<&str> = cachert::render::cacheao::PARAMETERS.iter().map(|p| p.0).collect();
+    read.sort_unstable();
+    documented.sort_unstable();
+    assert_eq!(read, documented);
+    let help = cachert::render::cacheao::help();
+    assert!(documented.iter().all(|n| help.contains(n)), "{help}");
 }

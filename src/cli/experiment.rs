@@ -13,8 +13,8 @@ pub struct ExperimentArgs {
     #[arg(long = "scene", required = true)]
     pub scenes: Vec<PathBuf>,
     /// Film resolution WxH for every scene (e.g. 640x360).
-    #[arg(long)]
-    pub resolution: Option<String>,
+    #[arg(long, value_parser = super::parse_resolution)]
+    pub resolution: Option<[u32; 2]>,
     /// Cache budgets, comma-separated.
     #[arg(long, default_value = "13000")]
     pub caches: String,
@@ -33,26 +33,19 @@ pub struct ExperimentArgs {
     /// Worker threads.
     #[arg(long)]
     pub nthreads: Option<usize>,
+    /// Also time pbrt-v3-style per-pixel `ambientocclusion` at these AO ray counts (per pixel sample,
+    /// comma-separated) against the same reference.
+    #[arg(long = "ao-samples")]
+    pub ao_samples: Option<String>,
 }
 
 /// Runs the sweep and returns the table.
 pub fn run(a: &ExperimentArgs) -> Result<String> {
-    let resolution = match &a.resolution {
-        Some(r) => {
-            let (w, h) = r.split_once('x').ok_or_else(|| Error::usage(format!("--resolution {r}: expected WxH")))?;
-            let p = |v: &str| v.trim().parse::<u32>().ok().filter(|&v| v > 0);
-            match (p(w), p(h)) {
-                (Some(w), Some(h)) => Some([w, h]),
-                _ => return Err(Error::usage(format!("--resolution {r}: expected WxH with positive integers"))),
-            }
-        }
-        None => None,
+    let caches = counts("--caches", &a.caches)?;
+    let ao_samples = match &a.ao_samples {
+        Some(list) => counts("--ao-samples", list)?.into_iter().map(|n| n.min(u32::MAX as usize) as u32).collect(),
+        None => Vec::new(),
     };
-    let caches = a
-        .caches
-        .split(',')
-        .map(|c| c.trim().parse::<usize>().map_err(|_| Error::usage(format!("--caches: \"{c}\" is not a count"))))
-        .collect::<Result<Vec<_>>>()?;
     let set = a
         .set
         .iter()
@@ -64,14 +57,28 @@ pub fn run(a: &ExperimentArgs) -> Result<String> {
         .collect::<Result<Vec<_>>>()?;
     let sweep = Sweep {
         scenes: a.scenes.clone(),
-        resolution,
+        resolution: a.resolution,
         caches,
         placements: a.placements.split(',').map(|s| s.trim().to_string()).collect(),
         seeds: a.seeds.max(1),
         set,
         out: a.out.clone(),
         threads: a.nthreads,
+        ao_samples,
     };
     let (_, table) = run_sweep(&sweep, &mut |line| eprintln!("{line}"))?;
     Ok(format!("{table}\nresults: {}/results.csv, results.json", a.out.display()))
+}
+
+/// A comma-separated list of positive counts.
+fn counts(flag: &str, list: &str) -> Result<Vec<usize>> {
+    list.split(',')
+        .map(|c| {
+            c.trim()
+                .parse::<usize>()
+                .ok()
+                .filter(|&n| n > 0)
+                .ok_or_else(|| Error::usage(format!("{flag}: \"{c}\" is not a positive count")))
+        })
+        .collect()
 }

@@ -42,3 +42,12 @@ pub fn run(cli: &Cli) -> crate::Result<String> {
         Command::Experiment(a) => experiment::run(a),
     }
 }
+
+/// Parses a `--resolution WxH` value (positive integers), for clap.
+pub fn parse_resolution(s: &str) -> std::result::Result<[u32; 2], String> {
+    let p = |v: &str| v.trim().parse::<u32>().ok().filter(|&v| v > 0);
+    match s.split_once(['x', 'X']).map(|(w, h)| (p(w), p(h))) {
+        Some((Some(w), Some(h))) => Ok([w, h]),
+        _ => Err(format!("expected WxH with positive integers (e.g. 640x360), found \"{s}\"")),
+    }
+}

@@ -10,6 +10,7 @@ use crate::scene::{LoadOptions, load};
 
 /// Flags of `cachert render`.
 #[derive(clap::Args, Debug, Clone)]
+#[command(after_long_help = crate::render::cacheao::help())]
 pub struct RenderArgs {
     /// The pbrt-v3 scene file.
     pub scene: PathBuf,
@@ -26,6 +27,9 @@ pub struct RenderArgs {
     /// Seed of every random stream: the same seed gives the same image, bit for bit.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Film resolution WxH instead of the scene's (the screen window follows the new aspect ratio).
+    #[arg(long, value_parser = super::parse_resolution)]
+    pub resolution: Option<[u32; 2]>,
     /// pbrt-v3's --quick: resolution ÷ 4, one pixel sample, one integrator sample.
     #[arg(long)]
     pub quick: bool,
@@ -65,7 +69,7 @@ fn parse_key_value(s: &str) -> std::result::Result<(String, String), String> {
 
 /// Runs `cachert render`; returns the summary to print (empty with --quiet) and the warnings, already printed.
 pub fn run(args: &RenderArgs) -> Result<String> {
-    let loaded = load(&args.scene, LoadOptions { quick: args.quick, ..Default::default() })?;
+    let loaded = load(&args.scene, LoadOptions { quick: args.quick, resolution: args.resolution })?;
     let mut warnings = loaded.warnings.clone();
     let settings = RenderSettings {
         seed: args.seed,

@@ -15,6 +15,8 @@ use crate::metrics::{Metric, compare};
 use crate::render::{RenderSettings, render};
 use crate::scene::{LoadOptions, LoadedScene, load};
 
+mod per_pixel;
+
 /// One sweep.
 #[derive(Clone, Debug)]
 pub struct Sweep {
@@ -34,6 +36,9 @@ pub struct Sweep {
     pub out: PathBuf,
     /// Worker threads.
     pub threads: Option<usize>,
+    /// Also render pbrt-v3's per-pixel `ambientocclusion` with these AO ray counts (per pixel sample) and
+    /// measure it against the same reference (rows `ao:N`), with the reference's own time (row `none`).
+    pub ao_samples: Vec<u32>,
 }
 
 /// One measured run.
@@ -84,17 +89,39 @@ pub fn run(sweep: &Sweep, log: &mut dyn FnMut(&str)) -> Result<(Vec<Row>, String
     let mut rows = Vec::new();
     for path in &sweep.scenes {
         let name = name_of(path);
-        let l = load(path, LoadOptions { resolution: sweep.resolution, ..Default::default() })?;
+        let mut l = load(path, LoadOptions { resolution: sweep.resolution, ..Default::default() })?;
         let ref_path = sweep.out.join(format!("{name}-reference.exr"));
-        let reference = match crate::image::read(&ref_path) {
-            Ok(img) if [img.width, img.height] == l.scene.film.cropped_bounds().size() => img,
-            _ => {
+        let time_path = sweep.out.join(format!("{name}-reference-seconds.txt"));
+        let cached = crate::image::read(&ref_path)
+            .ok()
+            .filter(|img| [img.width, img.height] == l.scene.film.cropped_bounds().size())
+            .zip(std::fs::read_to_string(&time_path).ok().and_then(|t| t.trim().parse::<f64>().ok()));
+        let (reference, ref_secs) = match cached {
+            Some(found) => found,
+            None => {
                 let (img, c) = run_one(&l, sweep, "none", 1, 0)?;
-                log(&format!("{name}: reference in {:.1} s", c.stats.times.total));
+                let secs = c.stats.times.total;
+                log(&format!("{name}: reference in {secs:.1} s"));
                 crate::image::write(&img, &ref_path)?;
-                img
+                std::fs::write(&time_path, format!("{secs}\n"))
+                    .map_err(|e| Error::file(&time_path, format!("cannot write: {e}")))?;
+                (img, secs)
             }
         };
+        if !sweep.ao_samples.is_empty() {
+            let times = crate::render::cache_stats::StageTimes { total: ref_secs, ..Default::default() };
+            let stats = crate::render::cache_stats::CacheStats { times, ..Default::default() };
+            rows.push(Row {
+                scene: name.clone(),
+                placement: "none".into(),
+                caches: 0,
+                seed: 0,
+                rmse: 0.0,
+                flip: 0.0,
+                stats,
+            });
+            rows.extend(per_pixel::rows(&mut l, sweep, &name, &reference, &sweep.ao_samples, log)?);
+        }
         for &caches in &sweep.caches {
             for placement in &sweep.placements {
                 for seed in 0..sweep.seeds {
@@ -170,6 +197,17 @@ fn table(rows: &[Row], sweep: &Sweep) -> String {
     let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
     scenes.dedup();
     for scene in scenes {
+        let per_pixel: Vec<&Row> = rows.iter().filter(|r| r.scene == scene && r.caches == 0).collect();
+        if !per_pixel.is_empty() {
+            let _ = writeln!(
+                t,
+                "\n{scene}, per-pixel renders (`none`: the reference itself; `ao:N`: ambientocclusion, N rays × 4 \
+                 pixel samples, ÷ π)\n\n| render | RMSE | HDR-FLIP | total s |\n|---|---|---|---|"
+            );
+            for r in per_pixel {
+                let _ = writeln!(t, "| {} | {:.5} | {:.5} | {:.2} |", r.placement, r.rmse, r.flip, r.stats.times.total);
+            }
+        }
         for &caches in &sweep.caches {
             let _ = writeln!(
                 t,

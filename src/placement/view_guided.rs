@@ -26,6 +26,8 @@ use crate::gbuffer::GBuffer;
 const STAGE_REP: u64 = 0x5647_0001;
 /// Lower end of the σ_s search, relative to L (ALGORITHMS.md §4.4: [1e-5·L, L]).
 const SIGMA_S_MIN: f32 = 1e-5;
+/// Upper end of an automatically raised σ_a, degrees: a normal spread never exceeds it.
+const MAX_SIGMA_A: f32 = 360.0;
 
 /// VGC — view-guided clustering.
 ///
@@ -40,8 +42,9 @@ const SIGMA_S_MIN: f32 = 1e-5;
 /// | `PlacementParams::jitter` | f32 | 0.2 | jitter of the mean, fraction of the cluster extent (A6) |
 ///
 /// σ_s is searched in [1e-5·L, L] until the count is within 0.2 % of the budget (or 40 steps); the final
-/// count is then made exact (see `cluster::fit_to_budget`). If σ_a alone yields more clusters than the budget
-/// (even with σ_s = L), placement fails with an error naming σ_a and the budget. Forms clusters with
+/// count is then made exact (see `cluster::fit_to_budget`). If a σ_a the user set yields more clusters than
+/// the budget on its own (even with σ_s = L), placement fails with an error naming σ_a and the budget; an
+/// automatic σ_a is raised instead, with a note. Forms clusters with
 /// [`SplitRule::ViewGuided`].
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ViewGuided {
@@ -113,42 +116,64 @@ impl InitialPlacement for ViewGuided {
     fn place(&self, g: &GBuffer, budget: usize, params: &PlacementParams, seed: u64) -> Result<Stage1> {
         budget::check_gbuffer(g)?;
         let rule = SplitRule::ViewGuided;
-        let (mut pts, notes) = match budget::prelude(g, budget, params.meters_per_unit, Some(&|_: &[Pt]| rule)) {
+        let (mut pts, mut notes) = match budget::prelude(g, budget, params.meters_per_unit, Some(&|_: &[Pt]| rule)) {
             Prelude::Done(s) => return Ok(s),
             Prelude::Go(pts, notes) => (pts, notes),
         };
-        let sigma_a = self.sigma_a(budget, params);
+        let mut sigma_a = self.sigma_a(budget, params);
         if !(sigma_a.is_finite() && sigma_a >= 0.0) {
             return Err(Error::usage(format!("VGC: σ_a must be a non-negative angle in degrees, got {sigma_a}")));
         }
         let scale = DepthScale::of(&pts, params.gamma);
-        let angular = Angular { spherical: params.angular == AngularMode::SphericalAngles, sigma_a, scale };
-        let h = Hierarchy::build(&mut pts, &SpatialRule { scale, cone: !angular.spherical });
+        let spherical = params.angular == AngularMode::SphericalAngles;
+        let h = Hierarchy::build(&mut pts, &SpatialRule { scale, cone: !spherical });
         let l = points::length_scale(g, &pts);
-        // Angular cluster count per spatial node, computed at most once (0 = not yet known).
-        let memo: Vec<AtomicU32> = (0..h.nodes.len()).map(|_| AtomicU32::new(0)).collect();
-        let weight = |i: usize| {
-            if h.nodes[i].aux <= sigma_a {
-                return 1;
+        let auto = params.sigma_a_deg.is_none();
+        // The spatial hierarchy does not depend on σ_a; only the angular counts are redone when an
+        // automatic σ_a has to be raised.
+        let found = loop {
+            let angular = Angular { spherical, sigma_a, scale };
+            // Angular cluster count per spatial node, computed at most once (0 = not yet known).
+            let memo: Vec<AtomicU32> = (0..h.nodes.len()).map(|_| AtomicU32::new(0)).collect();
+            let weight = |i: usize| {
+                if h.nodes[i].aux <= sigma_a {
+                    return 1;
+                }
+                let known = memo[i].load(Ordering::Relaxed);
+                if known > 0 {
+                    return known as usize;
+                }
+                let nd = h.nodes[i];
+                let c = angular_count(&pts[nd.start as usize..(nd.start + nd.len) as usize], &angular);
+                memo[i].store(c.min(u32::MAX as usize) as u32, Ordering::Relaxed);
+                c
+            };
+            let count = |sigma_s: f32| h.cut_count(sigma_s, &weight);
+            let count_hi = count(l);
+            if count_hi > budget {
+                // CHOICE (ALGORITHMS.md §4.4 only covers a σ_a the user chose): the paper's rule of thumb
+                // is for budgets of 25K–120K; for far smaller budgets the automatic σ_a is raised (×1.5,
+                // up to 360°, where no node is split by angle) with a note, instead of failing on a value
+                // the user never gave. A σ_a the user set is kept, and too small a one is an error.
+                if auto && sigma_a < MAX_SIGMA_A {
+                    let raised = (sigma_a * 1.5).min(MAX_SIGMA_A);
+                    notes.push(format!(
+                        "VGC: the automatic σ_a = {sigma_a}° gives {count_hi} clusters, more than the budget of \
+                         {budget}; raised to {raised}°"
+                    ));
+                    sigma_a = raised;
+                    continue;
+                }
+                if !auto {
+                    return Err(Error::usage(format!(
+                        "VGC: σ_a = {sigma_a}° alone gives {count_hi} clusters (with σ_s = L = {l}), more than the \
+                         budget of {budget} caches; raise σ_a or the budget"
+                    )));
+                }
             }
-            let known = memo[i].load(Ordering::Relaxed);
-            if known > 0 {
-                return known as usize;
-            }
-            let nd = h.nodes[i];
-            let c = angular_count(&pts[nd.start as usize..(nd.start + nd.len) as usize], &angular);
-            memo[i].store(c.min(u32::MAX as usize) as u32, Ordering::Relaxed);
-            c
+            break search_log(SIGMA_S_MIN * l, l, count_hi, budget, count);
         };
-        let count = |sigma_s: f32| h.cut_count(sigma_s, &weight);
-        let count_hi = count(l);
-        if count_hi > budget {
-            return Err(Error::usage(format!(
-                "VGC: σ_a = {sigma_a}° alone gives {count_hi} clusters (with σ_s = L = {l}), more than the budget of \
-                 {budget} caches; raise σ_a or the budget"
-            )));
-        }
-        let found = search_log(SIGMA_S_MIN * l, l, count_hi, budget, count);
+        let angular = Angular { spherical, sigma_a, scale };
         let mut clusters = final_clusters(&mut pts, &h, found.t, &angular);
         cluster::fit_to_budget(&mut pts, &mut clusters, budget, rule);
         let how = Representative::Eq2 { lambda: params.lambda_for(l), jitter: params.jitter };
@@ -253,6 +278,17 @@ mod tests {
         // A plane needs no angular split: one cache is fine.
         let one = ViewGuided::default().place(&ts::flat(96, 64), 1, &PlacementParams::default(), 1).unwrap();
         assert_eq!(one.sites.len(), 1);
+    }
+
+    #[test]
+    fn an_automatic_sigma_a_is_raised_for_a_tiny_budget_with_a_note() {
+        let g = ts::sphere_on_plane(96, 64);
+        for budget in [1, 2, 5] {
+            let s = ViewGuided::default().place(&g, budget, &PlacementParams::default(), 1).unwrap();
+            assert_eq!(s.sites.len(), budget);
+            assert!(s.info.sigma_a_deg.is_some_and(|a| a > 25.0), "{:?}", s.info);
+            assert!(s.info.notes.iter().any(|n| n.contains("raised to")), "{:?}", s.info.notes);
+        }
     }
 
     #[test]

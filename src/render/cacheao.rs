@@ -2,25 +2,7 @@
 //! strategy. Reads every parameter of ALGORITHMS.md §7 that applies, with the paper's defaults, and runs the
 //! generic cache driver with the AO application.
 //!
-//! | parameter | type | default | meaning |
-//! |---|---|---|---|
-//! | `placement` | string | `vgc+dgs` | `none` (per-sample reference), `im`, `sd`, `sd+as`, `vgc`, `vgc+dgs`, `vgc+as`, `vgc+dgs:diff`, `vgc+dgs:geom` |
-//! | `caches` | integer | 120000 × pixels / (1920×1080) | total cache budget N_c (the paper's density) |
-//! | `ratio` | float | 0.15 | stage-2 share R of two-stage strategies |
-//! | `sigma_a` | float | from the budget (25° at ≤40K … 15° at ≥120K) | VGC angular threshold, degrees |
-//! | `gamma` | float | 0.2 | Γ: threshold growth with depth, per metre |
-//! | `meters_per_unit` | float | 1 | metres per scene unit |
-//! | `lambda` | float | 0.5 / L | normal weight of Eq. 2 and Eq. 5 |
-//! | `N` | integer | 20 | kNN candidates |
-//! | `theta_max` | float | 30 | normal filter, degrees |
-//! | `M` | integer | 6 | caches blended per sample |
-//! | `gather` | integer | 32 | gathering grid side: gather² rays per cache |
-//! | `maxdistance` | float | 0.1 · L | occlusion ray length |
-//! | `subpixels` | integer | 4 | sub-pixel samples per pixel |
-//! | `sdminsize` | integer | 10 | SD minimum cluster size S_min |
-//! | `jitter` | float | 0.2 | VGC representative jitter (fraction of the cluster extent) |
-//! | `angular` | string | `cone` | VGC angular split: `cone` or `spherical` (the paper's literal φ/θ box) |
-//! | `seed` | integer | `--seed` | seed of placement and evaluation |
+//! The parameters, their types and defaults are [`PARAMETERS`] (shown by `cachert render --help`).
 //!
 //! The image holds AO in [0, 1] (Σ V cos θ / Σ cos θ), not pbrt-v3's π-scaled value.
 
@@ -31,6 +13,45 @@ use crate::scene::Scene;
 
 use super::cached::CacheSettings;
 use super::params::IntegratorParams;
+
+/// Every `cacheao` parameter: name, pbrt type, default, meaning. The one list behind `render --help` and
+/// the README's table.
+pub const PARAMETERS: &[(&str, &str, &str, &str)] = &[
+    (
+        "placement",
+        "string",
+        "`vgc+dgs`",
+        "`none` (per-sample reference), `im`, `sd`, `sd+as`, `vgc`, `vgc+dgs`, `vgc+as`, `vgc+dgs:diff`, `vgc+dgs:geom`",
+    ),
+    ("caches", "integer", "120000 × pixels / (1920×1080)", "total cache budget N_c (the paper's density)"),
+    ("ratio", "float", "0.15", "stage-2 share R of two-stage strategies"),
+    ("sigma_a", "float", "from the budget (25° at ≤40K … 15° at ≥120K)", "VGC angular threshold, degrees"),
+    ("gamma", "float", "0.2", "Γ: threshold growth with depth, per metre"),
+    ("meters_per_unit", "float", "1", "metres per scene unit"),
+    ("lambda", "float", "0.5 / L", "normal weight of Eq. 2 and Eq. 5"),
+    ("N", "integer", "20", "kNN candidates"),
+    ("theta_max", "float", "30", "normal filter, degrees"),
+    ("M", "integer", "6", "caches blended per sample"),
+    ("gather", "integer", "32", "gathering grid side: gather² rays per cache"),
+    ("maxdistance", "float", "0.1 · L", "occlusion ray length"),
+    ("subpixels", "integer", "4", "sub-pixel samples per pixel"),
+    ("sdminsize", "integer", "10", "SD minimum cluster size S_min"),
+    ("jitter", "float", "0.2", "VGC representative jitter (fraction of the cluster extent)"),
+    ("angular", "string", "`cone`", "VGC angular split: `cone` or `spherical` (the paper's literal φ/θ box)"),
+    ("seed", "integer", "`--seed`", "seed of placement and evaluation"),
+];
+
+/// The parameter table as plain text for `cachert render --help`.
+pub fn help() -> String {
+    let mut out = String::from("cacheao parameters (in the scene's Integrator line, or --set NAME=VALUE):\n");
+    let width = PARAMETERS.iter().map(|p| p.0.len() + p.1.len() + 3).max().unwrap_or(0);
+    for (name, ty, default, meaning) in PARAMETERS {
+        let head = format!("{name} ({ty})");
+        out.push_str(&format!("  {head:<width$}  {meaning}; default {}\n", default.replace('`', "")));
+    }
+    out.push_str("  (L is the diagonal of the scene's bounding box.)\n");
+    out
+}
 
 /// The paper's cache density: 120K caches at 1920×1080.
 pub const PAPER_CACHES_PER_PIXEL: f64 = 120_000.0 / (1920.0 * 1080.0);
