@@ -21,7 +21,7 @@ pub struct PixelSamples {
     index: u32,
     dim: u64,
     rng: Rng,
-    order_scratch: Vec<([f32; 2], u32)>,
+    order_scratch: OrderScratch,
 }
 
 /// Stage tag of camera-sample streams in random keys.
@@ -38,7 +38,7 @@ impl PixelSamples {
             index: 0,
             dim: 0,
             rng: Rng::new(0),
-            order_scratch: Vec::new(),
+            order_scratch: OrderScratch::default(),
         }
     }
 
@@ -89,24 +89,42 @@ impl PixelSamples {
 /// a k×k grid of cells visited in serpentine order, k = ⌈√n⌉). The set of points is unchanged, so every
 /// estimate over them is too; occlusion queries from one point then meet the same blockers in a row (see
 /// `scene::accel::OccluderHint`). `scratch` is reused storage.
-pub fn coherent_order(points: &mut [[f32; 2]], scratch: &mut Vec<([f32; 2], u32)>) {
+pub fn coherent_order(points: &mut [[f32; 2]], scratch: &mut OrderScratch) {
     let n = points.len();
     if n < 4 {
         return;
     }
-    let k = (n as f64).sqrt().ceil() as u32;
+    let k = (n as f64).sqrt().ceil() as usize;
+    let kf = k as f32;
     let cell = |p: [f32; 2]| {
-        let x = ((p[0] * k as f32) as u32).min(k - 1);
-        let y = ((p[1] * k as f32) as u32).min(k - 1);
+        let x = ((p[0] * kf) as usize).min(k - 1);
+        let y = ((p[1] * kf) as usize).min(k - 1);
         y * k + if y.is_multiple_of(2) { x } else { k - 1 - x }
     };
-    scratch.clear();
-    scratch.extend(points.iter().map(|&p| (p, cell(p))));
-    // Stable: points sharing a cell keep their order, so the result is a pure function of the input.
-    scratch.sort_by_key(|&(_, c)| c);
-    for (dst, (p, _)) in points.iter_mut().zip(scratch.iter()) {
-        *dst = *p;
+    let OrderScratch { copy, start } = scratch;
+    copy.clear();
+    copy.extend(points.iter().map(|&p| (p, cell(p) as u32)));
+    start.clear();
+    start.resize(k * k + 1, 0);
+    for &(_, c) in copy.iter() {
+        start[c as usize + 1] += 1;
     }
+    for i in 1..start.len() {
+        start[i] += start[i - 1];
+    }
+    // Stable: points sharing a cell keep their order, so the result is a pure function of the input.
+    for &(p, c) in copy.iter() {
+        let slot = &mut start[c as usize];
+        points[*slot as usize] = p;
+        *slot += 1;
+    }
+}
+
+/// Reusable storage of [`coherent_order`].
+#[derive(Clone, Debug, Default)]
+pub struct OrderScratch {
+    copy: Vec<([f32; 2], u32)>,
+    start: Vec<u32>,
 }
 
 #[cfg(test)]
@@ -126,7 +144,7 @@ mod tests {
             v.windows(2).map(|w| ((w[0][0] - w[1][0]).powi(2) + (w[0][1] - w[1][1]).powi(2)).sqrt()).sum::<f32>()
         };
         let random_path = step(&pts);
-        coherent_order(&mut pts, &mut Vec::new());
+        coherent_order(&mut pts, &mut OrderScratch::default());
         let mut after = pts.clone();
         after.sort_by(|a, b| a.partial_cmp(b).unwrap());
         assert_eq!(before, after);
