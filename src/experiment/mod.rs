@@ -56,6 +56,8 @@ pub struct Row {
     pub rmse: f64,
     /// Mean HDR-FLIP against the reference.
     pub flip: f64,
+    /// RMSE and mean HDR-FLIP against the converged per-pixel image (with `--ao-samples`; seed 0 only).
+    pub converged: Option<(f64, f64)>,
     /// Stage times and counts of the run.
     pub stats: crate::render::cache_stats::CacheStats,
 }
@@ -108,26 +110,29 @@ pub fn run(sweep: &Sweep, log: &mut dyn FnMut(&str)) -> Result<(Vec<Row>, String
                 (img, secs)
             }
         };
-        if !sweep.ao_samples.is_empty() {
+        // With --ao-samples: the converged image every seed-0 render is also measured against.
+        let converged = if sweep.ao_samples.is_empty() {
+            None
+        } else {
+            let conv = per_pixel::converged(&mut l, sweep, &name, log)?;
             let times = crate::render::cache_stats::StageTimes { total: ref_secs, ..Default::default() };
             let stats = crate::render::cache_stats::CacheStats { times, ..Default::default() };
-            rows.push(Row {
-                scene: name.clone(),
-                placement: "none".into(),
-                caches: 0,
-                seed: 0,
-                rmse: 0.0,
-                flip: 0.0,
-                stats,
-            });
-            rows.extend(per_pixel::rows(&mut l, sweep, &name, &reference, &sweep.ao_samples, log)?);
-        }
+            let against = Some(per_pixel::measure(&reference, &conv)?);
+            let (scene, placement) = (name.clone(), "none".to_string());
+            rows.push(Row { scene, placement, caches: 0, seed: 0, rmse: 0.0, flip: 0.0, converged: against, stats });
+            rows.extend(per_pixel::rows(&mut l, sweep, &name, &reference, &conv, log)?);
+            Some(conv)
+        };
         for &caches in &sweep.caches {
             for placement in &sweep.placements {
                 for seed in 0..sweep.seeds {
                     let (img, c) = run_one(&l, sweep, placement, caches, seed)?;
                     let m = compare(&img, &reference, &[Metric::Rmse, Metric::Flip])?;
                     let (rmse, flip) = (m[0].1, m[1].1);
+                    let against = match &converged {
+                        Some(conv) if seed == 0 => Some(per_pixel::measure(&img, conv)?),
+                        _ => None,
+                    };
                     log(&format!(
                         "{name} {placement} {caches} seed {seed}: rmse {rmse:.5} flip {flip:.5} ({:.1} s)",
                         c.stats.times.total
@@ -145,6 +150,7 @@ pub fn run(sweep: &Sweep, log: &mut dyn FnMut(&str)) -> Result<(Vec<Row>, String
                         seed,
                         rmse,
                         flip,
+                        converged: against,
                         stats: c.stats,
                     });
                 }
@@ -157,19 +163,21 @@ pub fn run(sweep: &Sweep, log: &mut dyn FnMut(&str)) -> Result<(Vec<Row>, String
 
 fn write_results(rows: &[Row], out: &Path) -> Result<()> {
     let mut csv = String::from(
-        "scene,placement,caches,seed,rmse,flip,total_s,shading_points_s,initial_gen_s,initial_comp_s,adaptive_gen_s,adaptive_comp_s,kd_tree_s,render_s,stage1,stage2\n",
+        "scene,placement,caches,seed,rmse,flip,rmse_converged,flip_converged,total_s,shading_points_s,initial_gen_s,initial_comp_s,adaptive_gen_s,adaptive_comp_s,kd_tree_s,render_s,stage1,stage2\n",
     );
     for r in rows {
         let t = &r.stats.times;
         let _ = writeln!(
             csv,
-            "{},{},{},{},{:.6},{:.6},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{}",
+            "{},{},{},{},{:.6},{:.6},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{}",
             r.scene,
             r.placement,
             r.caches,
             r.seed,
             r.rmse,
             r.flip,
+            r.converged.map_or(String::new(), |c| format!("{:.6}", c.0)),
+            r.converged.map_or(String::new(), |c| format!("{:.6}", c.1)),
             t.total,
             t.shading_points,
             t.initial_generation,
@@ -197,15 +205,21 @@ fn table(rows: &[Row], sweep: &Sweep) -> String {
     let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
     scenes.dedup();
     for scene in scenes {
-        let per_pixel: Vec<&Row> = rows.iter().filter(|r| r.scene == scene && r.caches == 0).collect();
-        if !per_pixel.is_empty() {
+        let measured: Vec<&Row> = rows.iter().filter(|r| r.scene == scene && r.converged.is_some()).collect();
+        if !measured.is_empty() {
             let _ = writeln!(
                 t,
-                "\n{scene}, per-pixel renders (`none`: the reference itself; `ao:N`: ambientocclusion, N rays × 4 \
-                 pixel samples, ÷ π)\n\n| render | RMSE | HDR-FLIP | total s |\n|---|---|---|---|"
+                "\n{scene}, against the converged per-pixel image (`none`: the per-sample reference; `ao:N`: \
+                 ambientocclusion, N rays × 4 pixel samples, ÷ π; placements: seed 0)\n\n\
+                 | render | caches | RMSE | HDR-FLIP | total s |\n|---|---|---|---|---|"
             );
-            for r in per_pixel {
-                let _ = writeln!(t, "| {} | {:.5} | {:.5} | {:.2} |", r.placement, r.rmse, r.flip, r.stats.times.total);
+            for r in measured {
+                let (rmse, flip) = r.converged.unwrap_or_default();
+                let _ = writeln!(
+                    t,
+                    "| {} | {} | {rmse:.5} | {flip:.5} | {:.2} |",
+                    r.placement, r.caches, r.stats.times.total
+                );
             }
         }
         for &caches in &sweep.caches {

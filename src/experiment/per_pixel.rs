@@ -1,7 +1,9 @@
 //! Experiments: the per-pixel side of "cache AO exists to be faster than per-pixel AO at equal quality".
-//! Renders pbrt-v3's `ambientocclusion` at several ray counts with the cache runs' ray length, four pixel
-//! samples and a box filter (what the cache driver's sub-pixel shading does), and measures each image,
-//! divided by π, against the same per-sample reference the placements are measured against.
+//! Renders pbrt-v3's `ambientocclusion` with the cache runs' ray length and a box filter (what the cache
+//! driver's sub-pixel shading does), divided by π: once converged (64 pixel samples × 64 rays, so the pixel
+//! footprint is integrated too — four sub-pixel samples at other positions than the reference's differ
+//! at every edge however many rays they trace), and at several ray counts with four pixel samples, each
+//! measured against the converged image and against the per-sample reference.
 //!
 //! Depends on `scene`, `render`, `image` and `metrics`; only `experiment` uses it.
 
@@ -30,33 +32,62 @@ fn max_distance(l: &LoadedScene, sweep: &Sweep) -> String {
         .map_or_else(|| (0.1 * l.scene.diagonal()).to_string(), |(_, v)| v.clone())
 }
 
-/// One row per entry of `nsamples` (AO rays per pixel sample): placement `ao:N`, budget 0, seed 0.
+/// Converged image: pixel samples and AO rays per pixel sample (4096 rays per pixel).
+const CONVERGED: (u32, u32) = (64, 64);
+
+/// RMSE and mean HDR-FLIP of `img` against `reference`.
+pub(super) fn measure(img: &Image, reference: &Image) -> Result<(f64, f64)> {
+    let m = compare(img, reference, &[Metric::Rmse, Metric::Flip])?;
+    Ok((m[0].1, m[1].1))
+}
+
+/// The converged per-pixel image of the scene, kept in the output folder as `NAME-converged.exr` and reused.
+pub(super) fn converged(l: &mut LoadedScene, sweep: &Sweep, name: &str, log: &mut dyn FnMut(&str)) -> Result<Image> {
+    let path = sweep.out.join(format!("{name}-converged.exr"));
+    if let Ok(img) = crate::image::read(&path)
+        && [img.width, img.height] == l.scene.film.cropped_bounds().size()
+    {
+        return Ok(img);
+    }
+    let (img, secs) = per_pixel_ao(l, sweep, CONVERGED.0, CONVERGED.1)?;
+    log(&format!("{name}: converged per-pixel image ({} spp x {} rays) in {secs:.1} s", CONVERGED.0, CONVERGED.1));
+    crate::image::write(&img, &path)?;
+    Ok(img)
+}
+
+/// One row per entry of `sweep.ao_samples` (AO rays per pixel sample, four pixel samples): placement
+/// `ao:N`, budget 0, seed 0; `rmse`/`flip` against `reference`, `converged` against `conv`.
 pub(super) fn rows(
     l: &mut LoadedScene,
     sweep: &Sweep,
     name: &str,
     reference: &Image,
-    nsamples: &[u32],
+    conv: &Image,
     log: &mut dyn FnMut(&str),
 ) -> Result<Vec<Row>> {
-    // A box over the pixel, as the cache driver reconstructs its sub-pixel samples.
-    let saved = std::mem::replace(&mut l.scene.filter, Filter { radius: [0.5, 0.5], kind: FilterKind::Box });
-    let result = nsamples.iter().map(|&n| one(l, sweep, name, reference, n, log)).collect();
-    l.scene.filter = saved;
-    result
+    let mut out = Vec::new();
+    for &n in &sweep.ao_samples {
+        let (img, secs) = per_pixel_ao(l, sweep, PIXEL_SAMPLES, n)?;
+        let (rmse, flip) = measure(&img, reference)?;
+        let against = measure(&img, conv)?;
+        log(&format!(
+            "{name} ambientocclusion {n} rays x {PIXEL_SAMPLES} spp: rmse {rmse:.5} flip {flip:.5}, against the \
+             converged image rmse {:.5} flip {:.5} ({secs:.1} s)",
+            against.0, against.1
+        ));
+        let times = StageTimes { render: secs, total: secs, ..Default::default() };
+        let (scene, placement) = (name.to_string(), format!("ao:{n}"));
+        let stats = CacheStats { times, ..Default::default() };
+        out.push(Row { scene, placement, caches: 0, seed: 0, rmse, flip, converged: Some(against), stats });
+    }
+    Ok(out)
 }
 
-fn one(
-    l: &LoadedScene,
-    sweep: &Sweep,
-    name: &str,
-    reference: &Image,
-    n: u32,
-    log: &mut dyn FnMut(&str),
-) -> Result<Row> {
+/// pbrt-v3's `ambientocclusion` with `spp` pixel samples of `n` rays, box-filtered, ÷ π; and its wall seconds.
+fn per_pixel_ao(l: &mut LoadedScene, sweep: &Sweep, spp: u32, n: u32) -> Result<(Image, f64)> {
     let settings = RenderSettings {
         seed: 0,
-        spp: Some(PIXEL_SAMPLES),
+        spp: Some(spp),
         threads: sweep.threads,
         integrator: Some("ambientocclusion".into()),
         set: vec![
@@ -66,25 +97,15 @@ fn one(
         ],
         ..Default::default()
     };
+    // A box over the pixel, as the cache driver reconstructs its sub-pixel samples.
+    let saved = std::mem::replace(&mut l.scene.filter, Filter { radius: [0.5, 0.5], kind: FilterKind::Box });
     let t = Instant::now();
-    let mut img = render(&l.scene, None, &settings, &mut Warnings::default())?.image;
+    let result = render(&l.scene, None, &settings, &mut Warnings::default());
     let secs = t.elapsed().as_secs_f64();
+    l.scene.filter = saved;
+    let mut img = result?.image;
     // pbrt-v3's estimator is π for an open hemisphere; the cache image holds the fraction in [0, 1].
     let inv_pi = std::f32::consts::FRAC_1_PI;
     img.pixels.iter_mut().for_each(|p| p.iter_mut().for_each(|c| *c *= inv_pi));
-    let m = compare(&img, reference, &[Metric::Rmse, Metric::Flip])?;
-    let (rmse, flip) = (m[0].1, m[1].1);
-    log(&format!(
-        "{name} ambientocclusion {n} rays x {PIXEL_SAMPLES} spp: rmse {rmse:.5} flip {flip:.5} ({secs:.1} s)"
-    ));
-    let times = StageTimes { render: secs, total: secs, ..Default::default() };
-    Ok(Row {
-        scene: name.into(),
-        placement: format!("ao:{n}"),
-        caches: 0,
-        seed: 0,
-        rmse,
-        flip,
-        stats: CacheStats { times, ..Default::default() },
-    })
+    Ok((img, secs))
 }

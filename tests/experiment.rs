@@ -1,0 +1,51 @@
+//! Behaviour of `cachert experiment`: the sweep's rows, files and table on a shipped scene, the error
+//! falling with the budget, the per-pixel comparison against the converged image, and the reference being
+//! reused on a second run.
+
+mod common;
+
+use std::path::Path;
+
+use cachert::experiment::{Sweep, run};
+
+fn sweep(out: &Path, ao_samples: Vec<u32>) -> Sweep {
+    Sweep {
+        scenes: vec![Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/spheres.pbrt")],
+        resolution: Some([48, 32]),
+        caches: vec![40, 320],
+        placements: vec!["im".into(), "vgc+dgs".into()],
+        seeds: 2,
+        set: vec![],
+        out: out.to_path_buf(),
+        threads: Some(2),
+        ao_samples,
+    }
+}
+
+#[test]
+fn a_sweep_writes_every_row_and_its_files_and_reuses_the_reference() {
+    let dir = common::TempDir::new("experiment");
+    let mut log = Vec::new();
+    let (rows, table) = run(&sweep(&dir.0, vec![1, 16]), &mut |l| log.push(l.to_string())).unwrap();
+    // 2 budgets × 2 placements × 2 seeds, plus `none` and two `ao:N` rows.
+    assert_eq!(rows.len(), 11, "{rows:#?}");
+    assert!(log.iter().any(|l| l.contains("reference in")), "{log:?}");
+    for p in ["im", "vgc+dgs"] {
+        let err = |c: usize| rows.iter().filter(|r| r.placement == p && r.caches == c).map(|r| r.rmse).sum::<f64>();
+        assert!(err(320) < err(40), "{p}: the error must fall as caches grow");
+    }
+    // Seed-0 renders and the per-pixel ones are also measured against the converged image; more rays, less
+    // error.
+    assert!(rows.iter().all(|r| r.converged.is_some() == (r.seed == 0)), "{rows:#?}");
+    let conv = |p: &str| rows.iter().find(|r| r.placement == p).and_then(|r| r.converged).unwrap().0;
+    assert!(conv("ao:16") < conv("ao:1"));
+    let csv = std::fs::read_to_string(dir.path("results.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 12);
+    assert!(dir.path("results.json").is_file() && dir.path("scenes-spheres-converged.exr").is_file());
+    assert!(table.contains("| vgc+dgs |") && table.contains("converged"), "{table}");
+
+    // A second sweep reuses the stored reference and converged image.
+    let mut log = Vec::new();
+    run(&sweep(&dir.0, vec![1]), &mut |l| log.push(l.to_string())).unwrap();
+    assert!(!log.iter().any(|l| l.contains("reference in") || l.contains("converged per-pixel image")), "{log:?}");
+}
