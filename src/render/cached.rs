@@ -62,6 +62,8 @@ pub struct CachedOutput {
 /// Stage tags of random streams.
 const STAGE_RECORD: u64 = 0x7265_636f;
 const STAGE_SHADE: u64 = 0x7368_6164;
+/// Pixels of a row whose sub-pixel samples share one group lookup in the cache index.
+const GROUP_PIXELS: usize = 8;
 /// Sub-pixel positions use a fixed key, so every method and the reference shade the same samples.
 const SUBPIXEL_KEY: u64 = 0x5355_4250_4958;
 
@@ -244,34 +246,46 @@ fn shade_image<A: Application>(
         .map(|row| {
             let mut out = vec![[0.0f32; 3]; w];
             let mut rays = RayCounters::default();
-            let (mut near, mut weights, mut blend) = (Vec::new(), Vec::new(), Vec::new());
+            let (mut weights, mut blend) = (Vec::new(), Vec::new());
+            let (mut points, mut queries) = (Vec::new(), Vec::new());
             let y = b.min[1] + row as i32;
-            for (col, px) in out.iter_mut().enumerate() {
-                let x = b.min[0] + col as i32;
-                let mut sum = [0.0f32; 3];
-                for i in 0..n {
-                    let u = subpixel(x, y, i);
-                    rays.camera += 1;
-                    let Some(sp) = shading_point(scene, [x as f32 + u[0], y as f32 + u[1]]) else { continue };
-                    let mut rng =
-                        Rng::keyed(s.seed, STAGE_SHADE, ((y as u32 as u64) << 32 | x as u32 as u64) * 64 + i as u64);
-                    let v = if reference {
-                        app.reference(scene, &sp, &mut rng, &mut rays)
-                    } else if let Some(index) = index {
-                        index.select(sp.p, sp.n, &mut near);
-                        index.interpolate_weights(&near, &mut weights);
-                        blend.clear();
-                        blend.extend(weights.iter().map(|&(id, wt)| (&records[id as usize], wt)));
-                        if blend.is_empty() { [0.0; 3] } else { app.shade(scene, &sp, &blend, &mut rng, &mut rays) }
-                    } else {
-                        [0.0; 3]
-                    };
-                    for k in 0..3 {
-                        sum[k] += v[k];
+            let key = |x: i32, i: u32| ((y as u32 as u64) << 32 | x as u32 as u64) * 64 + i as u64;
+            for first in (0..w).step_by(GROUP_PIXELS) {
+                // The sub-pixel shading points of a run of pixels, looked up in the index as one group (the
+                // same selections as one lookup each, several times faster).
+                points.clear();
+                for col in first..(first + GROUP_PIXELS).min(w) {
+                    let x = b.min[0] + col as i32;
+                    for i in 0..n {
+                        let u = subpixel(x, y, i);
+                        rays.camera += 1;
+                        if let Some(sp) = shading_point(scene, [x as f32 + u[0], y as f32 + u[1]]) {
+                            points.push((col, key(x, i), sp));
+                        }
                     }
                 }
-                *px = sum.map(|v| v / n as f32);
+                let mut add = |col: usize, v: [f32; 3]| (0..3).for_each(|k| out[col][k] += v[k]);
+                if reference {
+                    for &(col, k, sp) in &points {
+                        let mut rng = Rng::keyed(s.seed, STAGE_SHADE, k);
+                        add(col, app.reference(scene, &sp, &mut rng, &mut rays));
+                    }
+                } else if let Some(index) = index {
+                    queries.clear();
+                    queries.extend(points.iter().map(|(_, _, sp)| (sp.p, sp.n)));
+                    index.select_group(&queries, |j, near| {
+                        let (col, k, sp) = &points[j];
+                        index.interpolate_weights(near, &mut weights);
+                        blend.clear();
+                        blend.extend(weights.iter().map(|&(id, wt)| (&records[id as usize], wt)));
+                        if !blend.is_empty() {
+                            let mut rng = Rng::keyed(s.seed, STAGE_SHADE, *k);
+                            add(*col, app.shade(scene, sp, &blend, &mut rng, &mut rays));
+                        }
+                    });
+                }
             }
+            out.iter_mut().for_each(|px| *px = px.map(|v| v / n as f32));
             pb.inc(1);
             (out, rays)
         })
