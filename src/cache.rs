@@ -50,15 +50,21 @@ struct Cand {
     id: u32,
 }
 
-/// Reusable buffers of [`CacheIndex::select_group`].
+/// Reusable buffers of [`CacheIndex::select_group_in`]; keep one per thread across a run of neighbouring
+/// groups. It changes how fast selections are found, never what is selected.
 #[derive(Debug, Default)]
-struct GroupScratch {
+pub struct GroupScratch {
     /// Shared candidates, by (distance to the centre, id).
     cand: Vec<Cand>,
     /// Per query: the N nearest as packed keys.
     ranked: Vec<u64>,
     /// Packed (distance to the centre, id) keys while gathering.
     keys: Vec<u64>,
+    /// The N-th nearest distance of the last group that queried the tree: a group several times wider is
+    /// halved before querying (it would almost surely fail the width test after paying for the query).
+    last_spacing: Option<f32>,
+    /// The selection handed to the callback.
+    out: Vec<Neighbour>,
 }
 
 /// Packs a non-negative distance (or squared distance) and an id into one key ordered by (distance, id):
@@ -89,6 +95,9 @@ fn top_k(keys: &mut Vec<u64>, k: usize) {
 
 /// Largest shared candidate list of [`CacheIndex::select_group`]; longer ones split the group.
 const GROUP_CAP: usize = 192;
+
+/// How much wider than the last group's spacing a group may be before it is halved unqueried.
+const PRESPLIT: f32 = 2.0;
 
 /// A kd-tree over cache positions with the §5 selection and Eq. 5 weights.
 ///
@@ -231,10 +240,21 @@ impl CacheIndex {
     /// to its centre c (farthest at distance r) and then every cache within r + 2ρ of c, ρ the group's radius,
     /// which holds each member's N nearest by the triangle inequality — and ranks that list per query.
     /// Groups wider than r (depth edges) or with long lists are halved, down to single queries.
-    pub fn select_group(&self, queries: &[(Vec3A, Vec3A)], mut f: impl FnMut(usize, &[Neighbour])) {
-        let mut out = Vec::new();
-        let mut scratch = GroupScratch::default();
-        self.group(queries, 0, &mut out, &mut scratch, &mut f);
+    pub fn select_group(&self, queries: &[(Vec3A, Vec3A)], f: impl FnMut(usize, &[Neighbour])) {
+        self.select_group_in(queries, &mut GroupScratch::default(), f);
+    }
+
+    /// [`CacheIndex::select_group`] with buffers the caller keeps across a run of neighbouring groups (a
+    /// row of tiles), which also lets each group skip tree queries that the last one shows are futile.
+    pub fn select_group_in(
+        &self,
+        queries: &[(Vec3A, Vec3A)],
+        scratch: &mut GroupScratch,
+        mut f: impl FnMut(usize, &[Neighbour]),
+    ) {
+        let mut out = std::mem::take(&mut scratch.out);
+        self.group(queries, 0, &mut out, scratch, &mut f);
+        scratch.out = out;
     }
 
     fn group(
@@ -326,8 +346,12 @@ impl CacheIndex {
             keys.extend(self.ids.iter().map(|&id| by_centre(id)));
         } else {
             let rad = ps.map(|p| (p - c).length()).fold(0.0f32, f32::max);
+            if scratch.last_spacing.is_some_and(|d| rad > PRESPLIT * d) {
+                return None;
+            }
             let near = tree.query(&c.to_array()).nearest_n::<SquaredEuclidean<f32>>(NonZeroUsize::new(k)?).execute();
             let d = near.iter().map(|r| self.d2(self.ids[r.item as usize], c).sqrt()).fold(0.0f32, f32::max);
+            scratch.last_spacing = Some(d);
             // A group wider than its caches' spacing (a depth edge) would gather too many: split it.
             if rad > d {
                 return None;
@@ -599,11 +623,12 @@ mod tests {
         assert!(w.is_empty());
     }
 
-    /// Checks `select_group` against `select` query by query.
-    fn group_matches_single(index: &CacheIndex, queries: &[(Vec3A, Vec3A)]) {
+    /// Checks `select_group_in` (buffers kept across calls, as the render and DGS keep them) against
+    /// `select` query by query.
+    fn group_matches_single(index: &CacheIndex, queries: &[(Vec3A, Vec3A)], scratch: &mut GroupScratch) {
         let mut single = Vec::new();
         let mut calls = 0;
-        index.select_group(queries, |i, got| {
+        index.select_group_in(queries, scratch, |i, got| {
             assert_eq!(i, calls, "queries answered out of order");
             calls += 1;
             index.select(queries[i].0, queries[i].1, &mut single);
@@ -618,6 +643,9 @@ mod tests {
         for &count in &[3usize, 150, 5000, 40_000] {
             let caches = random_caches(&mut r, count);
             let index = CacheIndex::new(&caches, LookupParams::default(), 0.3);
+            // One scratch for every group of this index: tight groups first, then wider ones that the
+            // remembered spacing may split before querying.
+            let mut scratch = GroupScratch::default();
             for spread in [0.0, 0.002, 0.02, 0.3] {
                 let c = Vec3A::new(r.uniform(), r.uniform(), r.uniform());
                 let queries: Vec<(Vec3A, Vec3A)> = (0..16)
@@ -626,7 +654,7 @@ mod tests {
                         (p, (Vec3A::Z + random_unit(&mut r)).normalize())
                     })
                     .collect();
-                group_matches_single(&index, &queries);
+                group_matches_single(&index, &queries, &mut scratch);
             }
         }
     }
@@ -641,11 +669,12 @@ mod tests {
             (0..12).map(|i| (Vec3A::new(0.5 + 0.001 * i as f32, 0.5, 0.5), Vec3A::Z)).collect();
         queries.push((Vec3A::NAN, Vec3A::Z));
         queries.push((Vec3A::new(0.5, 0.5, 0.5), Vec3A::new(f32::NAN, 0.0, 0.0)));
-        group_matches_single(&index, &queries);
+        let mut scratch = GroupScratch::default();
+        group_matches_single(&index, &queries, &mut scratch);
         // A group straddling distant points (a depth edge) is split, still matching.
         let far: Vec<(Vec3A, Vec3A)> =
             (0..8).map(|i| (Vec3A::splat(if i % 2 == 0 { 0.05 } else { 0.95 }), Vec3A::Z)).collect();
-        group_matches_single(&index, &far);
+        group_matches_single(&index, &far, &mut scratch);
     }
 
     #[test]

@@ -24,12 +24,14 @@ const PIXEL_SAMPLES: u32 = 4;
 
 /// The `maxdistance` the cache runs use: `--set maxdistance=…`, else 0.1 · the scene diagonal.
 fn max_distance(l: &LoadedScene, sweep: &Sweep) -> String {
-    sweep
-        .set
-        .iter()
-        .rev()
-        .find(|(k, _)| k == "maxdistance")
-        .map_or_else(|| (0.1 * l.scene.diagonal()).to_string(), |(_, v)| v.clone())
+    sweep.set.iter().rev().find(|(k, _)| k == "maxdistance").map_or_else(
+        || {
+            let d = l.scene.diagonal();
+            // cacheao's own default: 0.1 · L, unbounded for a scene without extent.
+            if d > 0.0 { (0.1 * d).to_string() } else { "1e30".into() }
+        },
+        |(_, v)| v.clone(),
+    )
 }
 
 /// Converged image: pixel samples and AO rays per pixel sample (4096 rays per pixel).

@@ -13,7 +13,7 @@ use super::budget::{free_usable, pick_uniform};
 use super::discrete2d::Discrete2D;
 use super::points::usable_normal;
 use super::{AdaptiveInfo, AdaptivePlacement, CacheId, CacheOracle, DgsTerms, PlacementParams, Stage1};
-use crate::cache::CacheIndex;
+use crate::cache::{CacheIndex, GroupScratch};
 use crate::error::Result;
 use crate::gbuffer::{GBuffer, PixelId};
 use crate::sampling::Rng;
@@ -73,6 +73,7 @@ fn gather_band(g: &GBuffer, index: &CacheIndex, rows: std::ops::Range<usize>) ->
     let mut lens = vec![0usize; g.width * nrows];
     let mut queries = Vec::with_capacity(TILE * TILE);
     let mut where_ = Vec::with_capacity(TILE * TILE);
+    let mut scratch = GroupScratch::default();
     for tx in (0..g.width).step_by(TILE) {
         for ty in (0..nrows).step_by(TILE) {
             queries.clear();
@@ -85,7 +86,7 @@ fn gather_band(g: &GBuffer, index: &CacheIndex, rows: std::ops::Range<usize>) ->
                     }
                 }
             }
-            index.select_group(&queries, |i, near| {
+            index.select_group_in(&queries, &mut scratch, |i, near| {
                 let at = where_[i];
                 let slot = &mut sel[at * k..(at + 1) * k];
                 for (s, nb) in slot.iter_mut().zip(near) {

@@ -156,12 +156,7 @@ impl InitialPlacement for ViewGuided {
                 // up to 360°, where no node is split by angle) with a note, instead of failing on a value
                 // the user never gave. A σ_a the user set is kept, and too small a one is an error.
                 if auto && sigma_a < MAX_SIGMA_A {
-                    let raised = (sigma_a * 1.5).min(MAX_SIGMA_A);
-                    notes.push(format!(
-                        "VGC: the automatic σ_a = {sigma_a}° gives {count_hi} clusters, more than the budget of \
-                         {budget}; raised to {raised}°"
-                    ));
-                    sigma_a = raised;
+                    sigma_a = (sigma_a * 1.5).clamp(1.0, MAX_SIGMA_A);
                     continue;
                 }
                 if !auto {
@@ -173,6 +168,13 @@ impl InitialPlacement for ViewGuided {
             }
             break search_log(SIGMA_S_MIN * l, l, count_hi, budget, count);
         };
+        let chosen = self.sigma_a(budget, params);
+        if sigma_a != chosen {
+            notes.push(format!(
+                "VGC: the automatic σ_a = {chosen}° gives more clusters than the budget of {budget} on its own; \
+                 raised to {sigma_a}°"
+            ));
+        }
         let angular = Angular { spherical, sigma_a, scale };
         let mut clusters = final_clusters(&mut pts, &h, found.t, &angular);
         cluster::fit_to_budget(&mut pts, &mut clusters, budget, rule);

@@ -47,7 +47,11 @@ pub fn help() -> String {
     let width = PARAMETERS.iter().map(|p| p.0.len() + p.1.len() + 3).max().unwrap_or(0);
     for (name, ty, default, meaning) in PARAMETERS {
         let head = format!("{name} ({ty})");
-        out.push_str(&format!("  {head:<width$}  {meaning}; default {}\n", default.replace('`', "")));
+        out.push_str(&format!(
+            "  {head:<width$}  {}; default {}\n",
+            meaning.replace('`', ""),
+            default.replace('`', "")
+        ));
     }
     out.push_str("  (L is the diagonal of the scene's bounding box.)\n");
     out

@@ -14,7 +14,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 use crate::application::Application;
-use crate::cache::CacheIndex;
+use crate::cache::{CacheIndex, GroupScratch};
 use crate::error::{Error, Result};
 use crate::gbuffer::{GBuffer, PixelId, shading_point};
 use crate::image::Image;
@@ -248,6 +248,7 @@ fn shade_image<A: Application>(
             let mut rays = RayCounters::default();
             let (mut weights, mut blend) = (Vec::new(), Vec::new());
             let (mut points, mut queries) = (Vec::new(), Vec::new());
+            let mut lookup = GroupScratch::default();
             let y = b.min[1] + row as i32;
             let key = |x: i32, i: u32| ((y as u32 as u64) << 32 | x as u32 as u64) * 64 + i as u64;
             for first in (0..w).step_by(GROUP_PIXELS) {
@@ -273,7 +274,7 @@ fn shade_image<A: Application>(
                 } else if let Some(index) = index {
                     queries.clear();
                     queries.extend(points.iter().map(|(_, _, sp)| (sp.p, sp.n)));
-                    index.select_group(&queries, |j, near| {
+                    index.select_group_in(&queries, &mut lookup, |j, near| {
                         let (col, k, sp) = &points[j];
                         index.interpolate_weights(near, &mut weights);
                         blend.clear();
