@@ -48,4 +48,12 @@ fn a_sweep_writes_every_row_and_its_files_and_reuses_the_reference() {
     let mut log = Vec::new();
     run(&sweep(&dir.0, vec![1]), &mut |l| log.push(l.to_string())).unwrap();
     assert!(!log.iter().any(|l| l.contains("reference in") || l.contains("converged per-pixel image")), "{log:?}");
+
+    // Other parameters (here the ray length) make their own reference instead of reusing that one.
+    let mut other = sweep(&dir.0, vec![1]);
+    other.set = vec![("maxdistance".into(), "0.3".into())];
+    let mut log = Vec::new();
+    run(&other, &mut |l| log.push(l.to_string())).unwrap();
+    assert!(log.iter().any(|l| l.contains("reference in")), "{log:?}");
+    assert!(log.iter().any(|l| l.contains("converged per-pixel image")), "{log:?}");
 }

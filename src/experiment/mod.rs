@@ -62,6 +62,18 @@ pub struct Row {
     pub stats: crate::render::cache_stats::CacheStats,
 }
 
+/// The part of stored reference file names that depends on the sweep's `--set` parameters (empty without
+/// any), so a reference made with other parameters (say another `maxdistance`) is never reused.
+fn variant(set: &[(String, String)]) -> String {
+    if set.is_empty() {
+        return String::new();
+    }
+    let text: String = set.iter().map(|(k, v)| format!("{k}={v};")).collect();
+    // FNV-1a: a short, stable tag.
+    let h = text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3));
+    format!("-{:08x}", h as u32)
+}
+
 fn name_of(p: &Path) -> String {
     let dir = p.parent().and_then(|d| d.file_name()).map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let stem = p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
@@ -92,8 +104,9 @@ pub fn run(sweep: &Sweep, log: &mut dyn FnMut(&str)) -> Result<(Vec<Row>, String
     for path in &sweep.scenes {
         let name = name_of(path);
         let mut l = load(path, LoadOptions { resolution: sweep.resolution, ..Default::default() })?;
-        let ref_path = sweep.out.join(format!("{name}-reference.exr"));
-        let time_path = sweep.out.join(format!("{name}-reference-seconds.txt"));
+        let stored = format!("{name}{}", variant(&sweep.set));
+        let ref_path = sweep.out.join(format!("{stored}-reference.exr"));
+        let time_path = sweep.out.join(format!("{stored}-reference-seconds.txt"));
         let cached = crate::image::read(&ref_path)
             .ok()
             .filter(|img| [img.width, img.height] == l.scene.film.cropped_bounds().size())
@@ -114,7 +127,7 @@ pub fn run(sweep: &Sweep, log: &mut dyn FnMut(&str)) -> Result<(Vec<Row>, String
         let converged = if sweep.ao_samples.is_empty() {
             None
         } else {
-            let conv = per_pixel::converged(&mut l, sweep, &name, log)?;
+            let conv = per_pixel::converged(&mut l, sweep, &stored, log)?;
             let times = crate::render::cache_stats::StageTimes { total: ref_secs, ..Default::default() };
             let stats = crate::render::cache_stats::CacheStats { times, ..Default::default() };
             let against = Some(per_pixel::measure(&reference, &conv)?);

@@ -43,16 +43,17 @@ pub(super) fn measure(img: &Image, reference: &Image) -> Result<(f64, f64)> {
     Ok((m[0].1, m[1].1))
 }
 
-/// The converged per-pixel image of the scene, kept in the output folder as `NAME-converged.exr` and reused.
-pub(super) fn converged(l: &mut LoadedScene, sweep: &Sweep, name: &str, log: &mut dyn FnMut(&str)) -> Result<Image> {
-    let path = sweep.out.join(format!("{name}-converged.exr"));
+/// The converged per-pixel image of the scene, kept in the output folder as `STORED-converged.exr` and reused
+/// (`stored`: the scene's name with the tag of the sweep's parameters).
+pub(super) fn converged(l: &mut LoadedScene, sweep: &Sweep, stored: &str, log: &mut dyn FnMut(&str)) -> Result<Image> {
+    let path = sweep.out.join(format!("{stored}-converged.exr"));
     if let Ok(img) = crate::image::read(&path)
         && [img.width, img.height] == l.scene.film.cropped_bounds().size()
     {
         return Ok(img);
     }
     let (img, secs) = per_pixel_ao(l, sweep, CONVERGED.0, CONVERGED.1)?;
-    log(&format!("{name}: converged per-pixel image ({} spp x {} rays) in {secs:.1} s", CONVERGED.0, CONVERGED.1));
+    log(&format!("{stored}: converged per-pixel image ({} spp x {} rays) in {secs:.1} s", CONVERGED.0, CONVERGED.1));
     crate::image::write(&img, &path)?;
     Ok(img)
 }
