@@ -12,6 +12,7 @@ use serde::Serialize;
 use crate::error::{Error, Result, Warnings};
 use crate::image::Image;
 use crate::metrics::{Metric, compare};
+use crate::render::cache_stats::StageTimes;
 use crate::render::{RenderSettings, render};
 use crate::scene::{LoadOptions, LoadedScene, load};
 
@@ -128,7 +129,7 @@ pub fn run(sweep: &Sweep, log: &mut dyn FnMut(&str)) -> Result<(Vec<Row>, String
             None
         } else {
             let conv = per_pixel::converged(&mut l, sweep, &stored, log)?;
-            let times = crate::render::cache_stats::StageTimes { total: ref_secs, ..Default::default() };
+            let times = StageTimes { total: ref_secs, ..Default::default() };
             let stats = crate::render::cache_stats::CacheStats { times, ..Default::default() };
             let against = Some(per_pixel::measure(&reference, &conv)?);
             let (scene, placement) = (name.clone(), "none".to_string());
@@ -175,30 +176,26 @@ pub fn run(sweep: &Sweep, log: &mut dyn FnMut(&str)) -> Result<(Vec<Row>, String
 }
 
 fn write_results(rows: &[Row], out: &Path) -> Result<()> {
-    let mut csv = String::from(
-        "scene,placement,caches,seed,rmse,flip,rmse_converged,flip_converged,total_s,shading_points_s,initial_gen_s,initial_comp_s,adaptive_gen_s,adaptive_comp_s,kd_tree_s,render_s,stage1,stage2\n",
-    );
+    let t0 = StageTimes::default();
+    let steps: String = t0.steps().iter().map(|(name, _)| format!("{}_s,", name.replace([' ', '-'], "_"))).collect();
+    let mut csv =
+        format!("scene,placement,caches,seed,rmse,flip,rmse_converged,flip_converged,total_s,{steps}stage1,stage2\n");
     for r in rows {
-        let t = &r.stats.times;
+        let converged =
+            |i: usize| r.converged.map_or(String::new(), |c| format!("{:.6}", if i == 0 { c.0 } else { c.1 }));
+        let steps: String = r.stats.times.steps().iter().map(|(_, secs)| format!("{secs:.4},")).collect();
         let _ = writeln!(
             csv,
-            "{},{},{},{},{:.6},{:.6},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{}",
+            "{},{},{},{},{:.6},{:.6},{},{},{:.4},{steps}{},{}",
             r.scene,
             r.placement,
             r.caches,
             r.seed,
             r.rmse,
             r.flip,
-            r.converged.map_or(String::new(), |c| format!("{:.6}", c.0)),
-            r.converged.map_or(String::new(), |c| format!("{:.6}", c.1)),
-            t.total,
-            t.shading_points,
-            t.initial_generation,
-            t.initial_computation,
-            t.adaptive_generation,
-            t.adaptive_computation,
-            t.kd_tree,
-            t.render,
+            converged(0),
+            converged(1),
+            r.stats.times.total,
             r.stats.stage1_caches,
             r.stats.stage2_caches
         );

@@ -27,6 +27,22 @@ pub struct StageTimes {
     pub total: f64,
 }
 
+impl StageTimes {
+    /// The steps in pipeline order with their summary labels (total excluded): the one list behind the
+    /// end-of-run summary and the experiment CSV's columns.
+    pub fn steps(&self) -> [(&'static str, f64); 7] {
+        [
+            ("shading points", self.shading_points),
+            ("initial gen", self.initial_generation),
+            ("initial comp", self.initial_computation),
+            ("adaptive gen", self.adaptive_generation),
+            ("adaptive comp", self.adaptive_computation),
+            ("kd-tree", self.kd_tree),
+            ("render", self.render),
+        ]
+    }
+}
+
 /// The report of a cache-based render.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct CacheStats {
@@ -92,20 +108,14 @@ impl CacheStats {
     /// The end-of-run summary lines.
     pub fn summary(&self) -> String {
         let t = &self.times;
+        let steps: Vec<String> = t.steps().iter().map(|(name, secs)| format!("{name} {secs:.3} s")).collect();
         let mut s = format!(
-            "caches {} ({} stage 1 + {} stage 2) of {} valid pixels\n\
-             shading points {:.3} s | initial gen {:.3} s | initial comp {:.3} s | adaptive gen {:.3} s | adaptive comp {:.3} s | kd-tree {:.3} s | render {:.3} s | total {:.3} s",
+            "caches {} ({} stage 1 + {} stage 2) of {} valid pixels\n{} | total {:.3} s",
             self.total_caches,
             self.stage1_caches,
             self.stage2_caches,
             self.valid_pixels,
-            t.shading_points,
-            t.initial_generation,
-            t.initial_computation,
-            t.adaptive_generation,
-            t.adaptive_computation,
-            t.kd_tree,
-            t.render,
+            steps.join(" | "),
             t.total
         );
         if let Some(sig) = self.placement.sigma_s {

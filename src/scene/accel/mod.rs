@@ -57,6 +57,18 @@ pub struct InstanceXf {
     pub object_from_world: Affine3A,
 }
 
+impl InstanceXf {
+    /// `ray` in instance space, with `t_max` as the ray length (the transform is affine: parameters carry
+    /// over unchanged).
+    fn local_ray(&self, ray: &Ray, t_max: f32) -> Ray {
+        Ray {
+            o: self.object_from_world.transform_point3a(ray.o),
+            d: self.object_from_world.transform_vector3a(ray.d),
+            t_max,
+        }
+    }
+}
+
 /// The nearest hit found by [`Accel::intersect`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
@@ -270,11 +282,7 @@ impl Accel {
                 let Some(inner) = self.objects[inst.object as usize].items.get(hint.inner as usize) else {
                     return false;
                 };
-                let local = Ray {
-                    o: inst.object_from_world.transform_point3a(ray.o),
-                    d: inst.object_from_world.transform_vector3a(ray.d),
-                    t_max: ray.t_max,
-                };
+                let local = inst.local_ray(ray, ray.t_max);
                 self.item_blocks(inner, &local, &RayShear::new(local.o, local.d))
             }
             _ => self.item_blocks(it, ray, &RayShear::new(ray.o, ray.d)),
@@ -325,11 +333,7 @@ impl Accel {
                     }),
                     PrimRef::Instance(i) => {
                         let inst = &self.instances[i as usize];
-                        let local = Ray {
-                            o: inst.object_from_world.transform_point3a(ray.o),
-                            d: inst.object_from_world.transform_vector3a(ray.d),
-                            t_max: r.t_max,
-                        };
+                        let local = inst.local_ray(ray, r.t_max);
                         self.nearest(&self.objects[inst.object as usize], &local)
                             .map(|h| Hit { instance: Some(i), ..h })
                     }
@@ -377,11 +381,7 @@ impl Accel {
                 let blocked = match it.r {
                     PrimRef::Instance(i) => {
                         let inst = &self.instances[i as usize];
-                        let local = Ray {
-                            o: inst.object_from_world.transform_point3a(ray.o),
-                            d: inst.object_from_world.transform_vector3a(ray.d),
-                            t_max: ray.t_max,
-                        };
+                        let local = inst.local_ray(ray, ray.t_max);
                         let inner_skip = skip
                             .and_then(|k| k.inner)
                             .filter(|(j, _)| *j == i)

@@ -5,4 +5,6 @@ pub mod mesh_data;
 pub mod obj;
 pub mod ply;
 pub mod quadric;
+#[cfg(test)]
+mod test_files;
 pub mod triangle;

@@ -87,37 +87,19 @@ fn merge(models: &[tobj::Model]) -> Result<MeshData, String> {
 mod tests {
     use super::*;
     use std::path::PathBuf;
-    use std::sync::atomic::{AtomicUsize, Ordering};
 
-    /// A file in the temp dir that is deleted when dropped.
-    struct TempFile(PathBuf);
-
-    impl Drop for TempFile {
-        fn drop(&mut self) {
-            let _ = std::fs::remove_file(&self.0);
-        }
-    }
+    use crate::scene::shapes::test_files::{self as tf, scene_dir};
 
     fn read(text: &str) -> (Result<MeshData>, Warnings) {
-        static N: AtomicUsize = AtomicUsize::new(0);
-        let name = format!("cachert-obj-test-{}-{}.obj", std::process::id(), N.fetch_add(1, Ordering::Relaxed));
-        let file = TempFile(std::env::temp_dir().join(name));
-        std::fs::write(&file.0, text).unwrap();
-        let mut warnings = Warnings::default();
-        (read_obj(&file.0, &mut warnings), warnings)
+        tf::read(read_obj, "obj", text.as_bytes())
     }
 
     fn ok(text: &str) -> MeshData {
-        let (mesh, warnings) = read(text);
-        assert!(warnings.is_empty(), "{warnings:?}");
-        mesh.unwrap()
+        tf::ok(read_obj, "obj", text.as_bytes())
     }
 
     fn err(text: &str) -> String {
-        match read(text).0 {
-            Err(Error::File { msg, .. }) => msg,
-            other => panic!("expected a file error, got {other:?}"),
-        }
+        tf::err(read_obj, "obj", text.as_bytes())
     }
 
     const TWO_OBJECTS: &str = "mtllib does-not-exist.mtl\n\
@@ -178,17 +160,6 @@ mod tests {
         let (mesh, warnings) = read("v 0 0 0\nv 1 0 0\np 1\nl 1 2\n");
         assert_eq!(mesh.unwrap().triangle_count(), 0);
         assert_eq!(warnings.len(), 1);
-    }
-
-    /// `../shared/scenes/<dir>` beside the repository, or `None` (with the reason printed) when it is absent.
-    fn scene_dir(dir: &str) -> Option<PathBuf> {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes").join(dir);
-        if path.is_dir() {
-            Some(path)
-        } else {
-            eprintln!("skipping: {} is absent", path.display());
-            None
-        }
     }
 
     #[test]

@@ -270,44 +270,21 @@ fn skip_element<B: Body>(el: &Element, body: &mut B) -> Result<(), String> {
 mod tests {
     use super::*;
     use std::path::PathBuf;
-    use std::sync::atomic::{AtomicUsize, Ordering};
 
-    /// A file in the temp dir that is deleted when dropped.
-    struct TempFile(PathBuf);
-
-    impl Drop for TempFile {
-        fn drop(&mut self) {
-            let _ = std::fs::remove_file(&self.0);
-        }
-    }
-
-    fn temp_file(bytes: &[u8]) -> TempFile {
-        static N: AtomicUsize = AtomicUsize::new(0);
-        let name = format!("cachert-ply-test-{}-{}.ply", std::process::id(), N.fetch_add(1, Ordering::Relaxed));
-        let path = std::env::temp_dir().join(name);
-        std::fs::write(&path, bytes).unwrap();
-        TempFile(path)
-    }
+    use crate::scene::shapes::test_files::{self as tf, scene_dir};
 
     /// Reads `bytes` as a PLY file.
     fn read(bytes: &[u8]) -> (Result<MeshData>, Warnings) {
-        let file = temp_file(bytes);
-        let mut warnings = Warnings::default();
-        (read_ply(&file.0, &mut warnings), warnings)
+        tf::read(read_ply, "ply", bytes)
     }
 
     fn ok(bytes: &[u8]) -> MeshData {
-        let (mesh, warnings) = read(bytes);
-        assert!(warnings.is_empty(), "{warnings:?}");
-        mesh.unwrap()
+        tf::ok(read_ply, "ply", bytes)
     }
 
     /// The error message without the path.
     fn err(bytes: &[u8]) -> String {
-        match read(bytes).0 {
-            Err(Error::File { msg, .. }) => msg,
-            other => panic!("expected a file error, got {other:?}"),
-        }
+        tf::err(read_ply, "ply", bytes)
     }
 
     fn warning_texts(w: &Warnings) -> Vec<String> {
@@ -619,17 +596,6 @@ mod tests {
         assert_eq!(mesh.triangle_count(), 0);
         assert_eq!(mesh.positions, vec![[1., 2., 3.]]);
         assert!(warning_texts(&warnings)[0].ends_with("plymesh: the file has no triangles, so the shape is empty"));
-    }
-
-    /// `../shared/scenes/<dir>` beside the repository, or `None` (with the reason printed) when it is absent.
-    fn scene_dir(dir: &str) -> Option<PathBuf> {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes").join(dir);
-        if path.is_dir() {
-            Some(path)
-        } else {
-            eprintln!("skipping: {} is absent", path.display());
-            None
-        }
     }
 
     /// The `.ply` files in `dir`, sorted.
