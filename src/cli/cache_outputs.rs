@@ -60,10 +60,5 @@ pub fn write_stats(out: &CachedOutput, settings: &serde_json::Value, path: &Path
     let v = serde_json::json!({ "settings": settings, "stats": &out.stats });
     let text =
         serde_json::to_string_pretty(&v).map_err(|e| Error::file(path, format!("cannot encode statistics: {e}")))?;
-    let tmp = path.with_extension("json.tmp");
-    std::fs::write(&tmp, text).map_err(|e| Error::file(path, format!("cannot write: {e}")))?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        Error::file(path, format!("cannot write: {e}"))
-    })
+    crate::image::write_bytes(path, text.as_bytes())
 }

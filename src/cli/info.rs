@@ -36,6 +36,10 @@ pub fn run(args: &InfoArgs) -> Result<String> {
         s.geometry.meshes.len(),
         s.geometry.accel.quadrics.len()
     );
+    if !st.shape_types.is_empty() {
+        let per_type: Vec<String> = st.shape_types.iter().map(|(t, n)| format!("{t} {n}")).collect();
+        let _ = writeln!(o, "            by type: {}", per_type.join(", "));
+    }
     let _ = writeln!(
         o,
         "triangles   {} stored ({world_tris} world, {object_tris} in {objects} object definitions)",

@@ -128,6 +128,13 @@ pub fn read(path: &Path) -> Result<Image> {
     decoded.map_err(|msg| Error::file(path, msg))
 }
 
+/// Writes `bytes` (a JSON or CSV report, say) to `path` all-or-nothing: a failed write leaves no file.
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
+    atomic::write_atomically(path, |out| {
+        std::io::Write::write_all(out, bytes).map_err(|e| format!("cannot write: {e}"))
+    })
+}
+
 /// Writes an image by extension: `.exr` (float RGB, scanline, ZIP), `.pfm` (float32 `PF`, little-endian,
 /// rows bottom to top like pbrt-v3) or `.png` (8-bit sRGB, clamped to [0, 1]). The file appears only
 /// when complete; an unknown extension is a usage error naming the allowed ones.

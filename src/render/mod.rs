@@ -17,8 +17,8 @@ pub use driver::render_image;
 use crate::error::{Error, Result, Warnings};
 use crate::image::Image;
 use crate::parse::{Named, ParamList};
-use crate::scene::Scene;
 use crate::scene::ray::Ray;
+use crate::scene::{Scene, filter};
 
 use samples::PixelSamples;
 
@@ -98,11 +98,24 @@ pub fn render(
         }
         sampler.spp = spp;
     }
-    let iparams = params::IntegratorParams::new(params, &settings.set);
+    if let Some(n) = integrator.filter(|n| n.name != name) {
+        if !n.params.is_empty() {
+            warnings.at(
+                &n.name_loc,
+                format!(
+                    "Integrator \"{}\" is replaced by --integrator {name}; its parameters ({}) are not used",
+                    n.name,
+                    n.params.iter().map(|p| p.name.as_str()).collect::<Vec<_>>().join(", ")
+                ),
+            );
+        }
+    }
     if name == "cacheao" {
+        let set = cache_sample_settings(scene, params, settings, warnings);
+        let iparams = params::IntegratorParams::new(params, &set);
         let (app, cs) = cacheao::settings(&iparams, scene, settings.seed, settings.progress)?;
         iparams.check_overrides(name)?;
-        report_unused(integrator, name, &settings.set, warnings);
+        report_unused(integrator, name, &set, warnings);
         let run = || cached::render_cached(scene, &app, &cs);
         let out = with_threads(settings.threads, run)??;
         let mut rays = out.stats.cache_rays;
@@ -116,6 +129,7 @@ pub fn render(
             cache: Some(Box::new(out)),
         });
     }
+    let iparams = params::IntegratorParams::new(params, &settings.set);
     let pixel: Box<dyn PixelIntegrator> = match name {
         "ambientocclusion" => Box::new(ao::AmbientOcclusion::from_params(&iparams, &sampler, settings.quick)?),
         other => {
@@ -156,4 +170,50 @@ fn report_unused(integrator: Option<&Named>, name: &str, set: &[(String, String)
             }
         }
     }
+}
+
+/// The sample settings a cache-based render honours and the ones it cannot, said aloud: `--spp` (and
+/// `--quick`'s one sample per pixel) become the sub-pixel sample count unless `subpixels` is set; the scene's
+/// Sampler and PixelFilter, and the Film's `scale` and `maxsampleluminance`, are not used (the driver shades
+/// `subpixels` jittered positions per pixel and averages them), each with a warning where it was written.
+/// Returns the `--set` list with the honoured settings added.
+fn cache_sample_settings(
+    scene: &Scene,
+    params: &ParamList,
+    settings: &RenderSettings,
+    warnings: &mut Warnings,
+) -> Vec<(String, String)> {
+    let mut set = settings.set.clone();
+    let subpixels_set = params.get("subpixels").is_some() || set.iter().any(|(k, _)| k == "subpixels");
+    let wanted = settings.spp.map(|n| (n, "--spp")).or(settings.quick.then_some((1, "--quick")));
+    match wanted {
+        Some((n, flag)) if subpixels_set => warnings.general(format!(
+            "{flag} ({n} samples per pixel) is not used: \"subpixels\" is set and gives the sub-pixel sample count"
+        )),
+        Some((n, _)) => set.push(("subpixels".into(), n.to_string())),
+        None => {}
+    }
+    let per_pixel = "it shades \"subpixels\" jittered positions per pixel (set it, or --spp)";
+    if let Some(loc) = &scene.declared.sampler {
+        warnings
+            .at(loc, format!("Sampler \"{}\" is not used by cache-based integrators: {per_pixel}", scene.sampler.name));
+    }
+    if let Some(loc) = &scene.declared.filter {
+        if scene.filter.kind != filter::FilterKind::Box || scene.filter.radius != [0.5, 0.5] {
+            warnings.at(
+                loc,
+                "PixelFilter is not used by cache-based integrators: the sub-pixel samples of a pixel are averaged (a box filter of radius 0.5)",
+            );
+        }
+    }
+    if scene.film.scale != 1.0 {
+        warnings.general(format!("Film \"scale\" {} is not applied by cache-based integrators", scene.film.scale));
+    }
+    if scene.film.max_sample_luminance.is_finite() {
+        warnings.general(format!(
+            "Film \"maxsampleluminance\" {} is not applied by cache-based integrators",
+            scene.film.max_sample_luminance
+        ));
+    }
+    set
 }

@@ -48,6 +48,8 @@ pub struct LoadStats {
     pub bvh_secs: f64,
     /// Shape directives turned into geometry.
     pub shapes: usize,
+    /// The same, per shape type (`"sphere"`, `"plymesh"`, …), sorted by name.
+    pub shape_types: Vec<(String, usize)>,
     /// Triangles stored (object definitions counted once).
     pub triangles: usize,
     /// Object instances.
@@ -77,6 +79,17 @@ pub struct Scene {
     pub lights: Vec<light::Light>,
     /// Emitting shapes.
     pub area_lights: Vec<light::AreaLight>,
+    /// Where the scene wrote the render options that integrators may not use (so they can say so).
+    pub declared: Declared,
+}
+
+/// Where the scene file set render options explicitly (`None`: not written, the default applies).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Declared {
+    /// The `Sampler` directive.
+    pub sampler: Option<SourceLoc>,
+    /// The `PixelFilter` directive.
+    pub filter: Option<SourceLoc>,
 }
 
 impl Scene {

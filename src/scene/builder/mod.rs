@@ -64,6 +64,7 @@ pub(crate) struct SceneBuilder {
     film_loc: Option<SourceLoc>,
     sampler: crate::scene::sampler::SamplerSpec,
     filter: crate::scene::filter::Filter,
+    declared: crate::scene::Declared,
     integrator: Option<Named>,
     media: HashMap<String, SourceLoc>,
     media_warned: bool,
@@ -81,6 +82,7 @@ pub(crate) struct SceneBuilder {
     current_object: Option<u32>,
     instances: Vec<crate::scene::accel::InstanceXf>,
     shape_count: usize,
+    shape_types: std::collections::BTreeMap<String, usize>,
     motion_warned: bool,
 }
 
@@ -100,6 +102,7 @@ impl SceneBuilder {
             film_loc: None,
             sampler: Default::default(),
             filter: Default::default(),
+            declared: Default::default(),
             integrator: None,
             media: HashMap::new(),
             media_warned: false,
@@ -116,6 +119,7 @@ impl SceneBuilder {
             current_object: None,
             instances: Vec::new(),
             shape_count: 0,
+            shape_types: Default::default(),
             motion_warned: false,
         }
     }
@@ -287,6 +291,7 @@ impl SceneBuilder {
             accel,
         };
         stats.shapes = self.shape_count;
+        stats.shape_types = std::mem::take(&mut self.shape_types).into_iter().collect();
         stats.triangles = geometry.stored_triangles();
         let (_, _, instances) = geometry.accel.counts();
         stats.instances = instances;
@@ -301,6 +306,7 @@ impl SceneBuilder {
             textures: self.textures,
             lights: self.lights,
             area_lights: self.area_lights,
+            declared: self.declared,
         };
         Ok(LoadedScene { scene, integrator: self.integrator, warnings: self.warnings, stats: stats.clone() })
     }

@@ -37,11 +37,13 @@ impl SceneBuilder {
         }
         self.report_unused(&n.params, "Sampler");
         self.sampler = s;
+        self.declared.sampler = Some(n.name_loc.clone());
         Ok(())
     }
 
     pub(super) fn filter_directive(&mut self, n: Named) -> Result<()> {
         self.filter = Filter::from_directive(&n, &mut self.warnings)?;
+        self.declared.filter = Some(n.name_loc.clone());
         self.report_unused(&n.params, "PixelFilter");
         Ok(())
     }

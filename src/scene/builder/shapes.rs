@@ -54,6 +54,7 @@ impl SceneBuilder {
         let material = self.material_for_shape(&n)?;
         self.report_unused(&n.params, "Shape");
         self.shape_count += 1;
+        *self.shape_types.entry(n.name.clone()).or_default() += 1;
         let xf = self.ctm[0];
         let reverse = self.gs.reverse_orientation;
         let shape = match built {
