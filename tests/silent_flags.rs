@@ -107,3 +107,13 @@ fn the_per_pixel_integrator_honours_the_sampler_silently() {
     assert_eq!(out.spp, 4);
     assert!(warnings.is_empty(), "{warnings:#?}");
 }
+
+#[test]
+fn pixelbounds_is_named_as_not_supported() {
+    let text = scene("", "Integrator \"ambientocclusion\" \"integer nsamples\" 1 \"integer pixelbounds\" [0 4 0 4]");
+    let (_, warnings) = run(&text, RenderSettings::default());
+    assert!(
+        warnings.iter().any(|w| w.starts_with("flags.pbrt:5:") && w.contains("\"pixelbounds\" is not supported")),
+        "{warnings:#?}"
+    );
+}

@@ -18,7 +18,7 @@ pub struct RenderArgs {
     /// "filename", else the scene's name with .exr, in the current directory.
     #[arg(long)]
     pub outfile: Option<PathBuf>,
-    /// Worker threads (default: all cores). The image does not depend on it.
+    /// Worker threads (default, or 0 as in pbrt-v3: all cores). The image does not depend on it.
     #[arg(long)]
     pub nthreads: Option<usize>,
     /// Samples per pixel, overriding the scene's Sampler.

@@ -146,12 +146,12 @@ pub fn render(
     Ok(RenderOutput { image, rays, render_secs, spp: sampler.spp, integrator: name.to_string(), cache: None })
 }
 
-/// Runs `f` in a pool of `threads` workers (default: rayon's global pool).
+/// Runs `f` in a pool of `threads` workers (default, or 0 as in pbrt-v3: rayon's global pool, all cores).
 fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
-    match threads {
+    match threads.filter(|&n| n > 0) {
         Some(n) => {
             let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(n.max(1))
+                .num_threads(n)
                 .build()
                 .map_err(|e| Error::usage(format!("cannot start {n} threads: {e}")))?;
             Ok(pool.install(f))
@@ -165,7 +165,12 @@ fn report_unused(integrator: Option<&Named>, name: &str, set: &[(String, String)
     if let Some(n) = integrator.filter(|n| n.name == name) {
         for p in n.params.unused() {
             // A parameter replaced by --set was not read because the command line won, not because it is unknown.
-            if p.name != "pixelbounds" && !set.iter().any(|(k, _)| *k == p.name) {
+            if p.name == "pixelbounds" {
+                warnings.at(
+                    &p.loc,
+                    "Integrator: \"pixelbounds\" is not supported; the whole film is rendered (Film \"cropwindow\" restricts it)",
+                );
+            } else if !set.iter().any(|(k, _)| *k == p.name) {
                 warnings.at(&p.loc, format!("Integrator: unused parameter \"{} {}\"", p.ty.word(), p.name));
             }
         }
