@@ -404,8 +404,18 @@ fn check_count(ty: ParamType, name: &str, value: &ParamValue, loc: &SourceLoc) -
     }
 }
 
-/// "unknown directive" with the closest keyword, when one is close.
+/// pbrt-v2 directives that pbrt-v3 dropped, with what a pbrt-v3 scene writes instead.
+const PBRT_V2_DIRECTIVES: [(&str, &str); 3] = [
+    ("SurfaceIntegrator", "pbrt-v3 scenes name their integrator with \"Integrator\""),
+    ("VolumeIntegrator", "pbrt-v3 has no volume integrator directive"),
+    ("Renderer", "pbrt-v3 has no renderer directive"),
+];
+
+/// "unknown directive" with the closest keyword, when one is close (or what replaced a pbrt-v2 directive).
 fn unknown_directive(word: &str) -> String {
+    if let Some((_, instead)) = PBRT_V2_DIRECTIVES.iter().find(|(kw, _)| *kw == word) {
+        return format!("\"{word}\" is a pbrt-v2 directive, not pbrt-v3's: {instead}");
+    }
     let keywords = DIRECTIVES.iter().map(|(kw, _)| *kw);
     match closest(word, keywords) {
         Some(kw) => format!("unknown directive \"{word}\" (did you mean \"{kw}\"?)"),
@@ -606,6 +616,10 @@ mod tests {
             "t.pbrt:1:1: unknown directive \"attributebegin\" (did you mean \"AttributeBegin\"?)"
         );
         assert_eq!(err("Frobnicate"), "t.pbrt:1:1: unknown directive \"Frobnicate\"");
+        assert_eq!(
+            err("SurfaceIntegrator \"path\""),
+            "t.pbrt:1:1: \"SurfaceIntegrator\" is a pbrt-v2 directive, not pbrt-v3's: pbrt-v3 scenes name their integrator with \"Integrator\""
+        );
         assert_eq!(err("WorldBegin 3"), "t.pbrt:1:12: expected a directive, found 3");
         assert_eq!(err("Shape \"sphere\" \"float radius\" [1] [2]"), "t.pbrt:1:35: expected a directive, found [");
         let long = format!("\"{}\"", "x".repeat(60));
