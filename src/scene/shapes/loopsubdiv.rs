@@ -22,7 +22,9 @@ use crate::error::{Error, Result, SourceLoc, Warnings};
 use crate::parse::ParamList;
 
 /// Most triangles a subdivided mesh may have; larger `levels` are lowered to stay below it (with a warning).
-pub const MAX_SUBDIVIDED_TRIANGLES: u64 = 1 << 24;
+/// Each level multiplies the count by 4, so an absurd level would otherwise exhaust memory; at this cap,
+/// loading the mesh and building its BVH peaks near 2 GB.
+pub const MAX_SUBDIVIDED_TRIANGLES: u64 = 1 << 22;
 
 /// No neighbour across an edge.
 const NONE: u32 = u32::MAX;
@@ -738,9 +740,9 @@ mod tests {
 
     #[test]
     fn level_cap() {
-        assert_eq!(max_levels(1), 12);
-        assert_eq!(max_levels(4), 11);
-        assert_eq!(max_levels(5), 10);
+        assert_eq!(max_levels(1), 11);
+        assert_eq!(max_levels(4), 10);
+        assert_eq!(max_levels(5), 9);
         assert_eq!(max_levels(MAX_SUBDIVIDED_TRIANGLES), 0);
         assert_eq!(max_levels(u64::MAX), 0);
     }
