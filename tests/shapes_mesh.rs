@@ -151,10 +151,7 @@ fn bad_loopsubdiv_meshes_are_located_errors() {
             format!("Shape \"loopsubdiv\" {p} \"integer indices\" [0 1 2  3 3 4]"),
             "{file}:6:66: loopsubdiv: triangle 1 uses vertex 3 more than once (3, 3, 4)",
         ),
-        (
-            format!("Shape \"loopsubdiv\" {p}"),
-            "{file}:6:1: loopsubdiv: missing required parameter \"integer indices\"",
-        ),
+        (format!("Shape \"loopsubdiv\" {p}"), "{file}:6:1: loopsubdiv: missing required parameter \"integer indices\""),
         (
             "Shape \"loopsubdiv\" \"integer indices\" [0 1 2]".to_string(),
             "{file}:6:1: loopsubdiv: missing required parameter \"point3 P\"",
@@ -164,7 +161,10 @@ fn bad_loopsubdiv_meshes_are_located_errors() {
         assert_eq!(world_error("loop-bad", &body), want, "{body}");
     }
     // Unused vertices are ignored with a warning (pbrt-v3 would crash on them).
-    let (res, _, _dir) = load_world("loop-unused", &format!("Shape \"loopsubdiv\" \"integer levels\" [1] {p} \"integer indices\" [0 1 2]"));
+    let (res, _, _dir) = load_world(
+        "loop-unused",
+        &format!("Shape \"loopsubdiv\" \"integer levels\" [1] {p} \"integer indices\" [0 1 2]"),
+    );
     let loaded = res.expect("loads");
     assert_eq!(loaded.stats.triangles, 4);
     let w: Vec<&str> = loaded.warnings.iter().map(|w| w.msg.as_str()).collect();
@@ -186,7 +186,10 @@ fn bad_heightfields_are_located_errors() {
             "Shape \"heightfield\" \"integer nu\" [2000000000] \"integer nv\" [2000000000] \"float Pz\" [0 0 0 0]",
             "{file}:6:73: heightfield: 2000000000×2000000000 grid needs 4000000000000000000 heights \"Pz\", got 4",
         ),
-        ("Shape \"heightfield\" \"integer nu\" [2] \"float Pz\" [0 0]", "{file}:6:1: heightfield: missing required parameter \"integer nv\""),
+        (
+            "Shape \"heightfield\" \"integer nu\" [2] \"float Pz\" [0 0]",
+            "{file}:6:1: heightfield: missing required parameter \"integer nv\"",
+        ),
     ];
     for (body, want) in cases {
         assert_eq!(world_error("hf-bad", body), want, "{body}");
@@ -203,7 +206,9 @@ fn bad_nurbs_are_located_errors() {
             "{file}:6:53: nurbs: 3 knots in \"uknots\" do not match nu 2 + uorder 2",
         ),
         (
-            format!("Shape \"nurbs\" \"integer nu\" [2] \"integer uorder\" [3] \"float uknots\" [0 0 0 1 1] {ok_v} {p4}"),
+            format!(
+                "Shape \"nurbs\" \"integer nu\" [2] \"integer uorder\" [3] \"float uknots\" [0 0 0 1 1] {ok_v} {p4}"
+            ),
             "{file}:6:53: nurbs: \"uorder\" 3 is larger than the number of control points nu 2",
         ),
         (

@@ -349,13 +349,11 @@ fn build(positions: &[P3], indices: &[u32]) -> std::result::Result<Mesh, String>
             faces[f as usize].f[k] = g;
         }
     }
-    // Undirected edges with more than two faces: (a,b),(b,a) plus a third use in either direction would
-    // repeat a directed edge, which was refused above.
     let mut mesh = Mesh { verts: Vec::new(), faces };
     let limit = mesh.faces.len();
-    for i in 0..verts.len() {
+    for (i, vert) in verts.iter_mut().enumerate() {
         let v = i as u32;
-        let start = verts[i].start;
+        let start = vert.start;
         let mut f = start;
         let mut boundary = true;
         for _ in 0..limit {
@@ -368,7 +366,7 @@ fn build(positions: &[P3], indices: &[u32]) -> std::result::Result<Mesh, String>
                 break;
             }
         }
-        verts[i].boundary = boundary;
+        vert.boundary = boundary;
     }
     mesh.verts = verts;
     Ok(mesh)
@@ -602,9 +600,9 @@ mod tests {
             odd[k]
         };
         let mut want = Vec::new();
-        for i in 0..4 {
+        for (i, &e) in even.iter().enumerate() {
             let ring: Vec<(f64, V)> = (0..4).filter(|&j| j != i).map(|j| (1.0 / 5.0, odd_of(i, j))).collect();
-            want.push(add(scale(1.0 - 3.0 / 5.0, even[i]), lin(&ring)));
+            want.push(add(scale(1.0 - 3.0 / 5.0, e), lin(&ring)));
         }
         for i in 0..4 {
             for j in i + 1..4 {

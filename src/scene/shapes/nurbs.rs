@@ -56,7 +56,7 @@ impl<'a> Direction<'a> {
     /// non-decreasing order and that the domain `[knots[order-1], knots[count]]` is not empty. The error
     /// names the direction's parameters with `axis` (`"u"` or `"v"`).
     pub fn new(axis: &str, order: usize, knots: &'a [f64], count: usize) -> std::result::Result<Self, String> {
-        if order < 2 || order > MAX_ORDER {
+        if !(2..=MAX_ORDER).contains(&order) {
             return Err(format!("\"{axis}order\" must be between 2 and {MAX_ORDER}, got {order}"));
         }
         if order > count {
