@@ -51,16 +51,16 @@ fn matches_pbrt_v3(scene: &str) -> LoadedScene {
 #[test]
 fn closed_loopsubdiv_in_instances_matches_pbrt_v3() {
     let loaded = matches_pbrt_v3("loopsubdiv-closed");
-    // Ground 2 + cube 12·4³ (stored once, instanced twice) + tetrahedron 4·4².
-    assert_eq!(loaded.stats.triangles, 2 + 12 * 64 + 4 * 16);
+    // Ground 2 + cube 12·4² (stored once, instanced twice) + tetrahedron 4·4.
+    assert_eq!(loaded.stats.triangles, 2 + 12 * 16 + 4 * 4);
     assert_eq!(loaded.stats.instances, 2);
 }
 
 #[test]
 fn open_loopsubdiv_matches_pbrt_v3() {
     let loaded = matches_pbrt_v3("loopsubdiv-open");
-    // Ground 2 + open box 10·4³ + sheet 12·4³ + fan 6·4².
-    assert_eq!(loaded.stats.triangles, 2 + 10 * 64 + 12 * 64 + 6 * 16);
+    // Ground 2 + open box 10·4 + sheet 12·4³ + fan 6·4.
+    assert_eq!(loaded.stats.triangles, 2 + 10 * 4 + 12 * 64 + 6 * 4);
 }
 
 #[test]

@@ -391,7 +391,8 @@ pub struct Subdivided {
 ///
 /// `indices` must hold whole triangles with every index `< positions.len()`, and `levels` must keep the
 /// triangle count within [`MAX_SUBDIVIDED_TRIANGLES`] (see [`max_levels`]). The error names the first
-/// topology problem (see [`build`]).
+/// problem: an index out of range, a triangle that repeats a vertex, an edge shared by more than two
+/// triangles, or two triangles that traverse their shared edge the same way.
 pub fn subdivide(positions: &[[f64; 3]], indices: &[u32], levels: u32) -> std::result::Result<Subdivided, String> {
     if !indices.len().is_multiple_of(3) {
         return Err(format!("{} vertex indices is not a multiple of 3", indices.len()));
