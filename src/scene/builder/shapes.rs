@@ -1,5 +1,6 @@
 //! STAGE 2 (scene builder): the Shape directive — trianglemesh, plymesh, objmesh (our extension), sphere,
-//! disk, cylinder, and the meshes pbrt-v3 builds for loopsubdiv, heightfield and nurbs — with pbrt-v3's per-shape material overrides and area lights.
+//! disk, cylinder, and the meshes pbrt-v3 builds for loopsubdiv, heightfield and nurbs — with pbrt-v3's
+//! per-shape material overrides and area lights.
 
 use std::f64::consts::TAU;
 use std::rc::Rc;

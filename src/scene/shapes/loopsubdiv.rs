@@ -477,7 +477,8 @@ pub fn loopsubdiv_params(params: &ParamList, loc: &SourceLoc, warnings: &mut War
             return Err(Error::at(
                 &at("indices"),
                 format!(
-                    "loopsubdiv: parameter \"indices\": value {v} at position {k} is out of range: there are {} vertices",
+                    "loopsubdiv: parameter \"indices\": value {v} at position {k} is out of range: \
+                     there are {} vertices",
                     p.len()
                 ),
             ));
