@@ -1,5 +1,6 @@
 //! STAGE 2 (scene builder): the Shape directive — trianglemesh, plymesh, objmesh (our extension), sphere,
-//! disk, cylinder — with pbrt-v3's per-shape material overrides and area lights.
+//! disk, cylinder, and the meshes pbrt-v3 builds for loopsubdiv, heightfield and nurbs — with pbrt-v3's
+//! per-shape material overrides and area lights.
 
 use std::f64::consts::TAU;
 use std::rc::Rc;
@@ -10,18 +11,21 @@ use crate::scene::geometry::{ShapeId, ShapeInfo};
 use crate::scene::light::AreaLight;
 use crate::scene::mesh::{TriangleMesh, trianglemesh_params};
 use crate::scene::props::{Capture, schema_has};
+use crate::scene::shapes::heightfield::heightfield_params;
+use crate::scene::shapes::loopsubdiv::loopsubdiv_params;
 use crate::scene::shapes::mesh_data::MeshData;
+use crate::scene::shapes::nurbs::nurbs_params;
 use crate::scene::shapes::quadric::{Quadric, QuadricKind};
 use crate::scene::shapes::{obj, ply};
 
 use super::SceneBuilder;
 
 /// pbrt-v3 shapes cachert does not model; they are skipped with a warning rather than failing the scene.
-const UNSUPPORTED_PBRT_SHAPES: [&str; 7] =
-    ["cone", "paraboloid", "hyperboloid", "curve", "loopsubdiv", "nurbs", "heightfield"];
+const UNSUPPORTED_PBRT_SHAPES: [&str; 4] = ["cone", "paraboloid", "hyperboloid", "curve"];
 
 /// The shape types cachert reads.
-const SHAPES: [&str; 6] = ["trianglemesh", "plymesh", "objmesh", "sphere", "disk", "cylinder"];
+const SHAPES: [&str; 9] =
+    ["trianglemesh", "plymesh", "objmesh", "sphere", "disk", "cylinder", "loopsubdiv", "heightfield", "nurbs"];
 
 enum Built {
     Mesh(MeshData),
@@ -34,6 +38,9 @@ impl SceneBuilder {
         let built = match n.name.as_str() {
             "trianglemesh" => Built::Mesh(trianglemesh_params(&n.params, loc, &mut self.warnings)?),
             "plymesh" | "objmesh" => self.mesh_file(&n, loc)?,
+            "loopsubdiv" => Built::Mesh(loopsubdiv_params(&n.params, loc, &mut self.warnings)?),
+            "heightfield" => Built::Mesh(heightfield_params(&n.params, loc)?),
+            "nurbs" => Built::Mesh(nurbs_params(&n.params, loc, &mut self.warnings)?),
             "sphere" | "disk" | "cylinder" => Built::Quadric(quadric_params(&n)?),
             name if UNSUPPORTED_PBRT_SHAPES.contains(&name) => {
                 self.warnings.at(&n.name_loc, format!("pbrt-v3 shape \"{name}\" is not supported by cachert; skipped"));

@@ -1,7 +1,11 @@
-//! STAGE 2 (scene): shape data and intersection: mesh readers (PLY, OBJ) produce [`mesh_data::MeshData`];
+//! STAGE 2 (scene): shape data and intersection: mesh readers (PLY, OBJ) and the mesh-producing pbrt-v3
+//! shapes ([`loopsubdiv`], [`heightfield`], [`nurbs`]) produce [`mesh_data::MeshData`];
 //! [`triangle`] and [`quadric`] intersect rays with triangles and analytic shapes.
 
+pub mod heightfield;
+pub mod loopsubdiv;
 pub mod mesh_data;
+pub mod nurbs;
 pub mod obj;
 pub mod ply;
 pub mod quadric;
