@@ -1,5 +1,5 @@
 //! STAGE 2 (scene builder): the Shape directive — trianglemesh, plymesh, objmesh (our extension), sphere,
-//! disk, cylinder — with pbrt-v3's per-shape material overrides and area lights.
+//! disk, cylinder, cone, paraboloid, hyperboloid, curve — with pbrt-v3's per-shape material overrides and area lights.
 
 use std::f64::consts::TAU;
 use std::rc::Rc;
@@ -17,11 +17,11 @@ use crate::scene::shapes::{obj, ply};
 use super::SceneBuilder;
 
 /// pbrt-v3 shapes cachert does not model; they are skipped with a warning rather than failing the scene.
-const UNSUPPORTED_PBRT_SHAPES: [&str; 7] =
-    ["cone", "paraboloid", "hyperboloid", "curve", "loopsubdiv", "nurbs", "heightfield"];
+const UNSUPPORTED_PBRT_SHAPES: [&str; 4] = ["curve", "loopsubdiv", "nurbs", "heightfield"];
 
 /// The shape types cachert reads.
-const SHAPES: [&str; 6] = ["trianglemesh", "plymesh", "objmesh", "sphere", "disk", "cylinder"];
+const SHAPES: [&str; 9] =
+    ["trianglemesh", "plymesh", "objmesh", "sphere", "disk", "cylinder", "cone", "paraboloid", "hyperboloid"];
 
 enum Built {
     Mesh(MeshData),
@@ -34,7 +34,9 @@ impl SceneBuilder {
         let built = match n.name.as_str() {
             "trianglemesh" => Built::Mesh(trianglemesh_params(&n.params, loc, &mut self.warnings)?),
             "plymesh" | "objmesh" => self.mesh_file(&n, loc)?,
-            "sphere" | "disk" | "cylinder" => Built::Quadric(quadric_params(&n)?),
+            "sphere" | "disk" | "cylinder" | "cone" | "paraboloid" | "hyperboloid" => {
+                Built::Quadric(quadric_params(&n)?)
+            }
             name if UNSUPPORTED_PBRT_SHAPES.contains(&name) => {
                 self.warnings.at(&n.name_loc, format!("pbrt-v3 shape \"{name}\" is not supported by cachert; skipped"));
                 n.params.mark_all_used();
@@ -153,7 +155,7 @@ impl SceneBuilder {
     }
 }
 
-/// Reads sphere/disk/cylinder parameters with pbrt-v3's defaults and clamping.
+/// Reads sphere/disk/cylinder/cone/paraboloid/hyperboloid parameters with pbrt-v3's defaults and clamping.
 fn quadric_params(n: &Named) -> Result<QuadricKind> {
     let p = &n.params;
     let positive = |name: &str, v: f64| -> Result<f64> {
@@ -190,6 +192,50 @@ fn quadric_params(n: &Named) -> Result<QuadricKind> {
                 inner_radius: inner,
                 phi_max,
             }
+        }
+        "cone" => QuadricKind::Cone {
+            height: positive("height", p.float_or("height", 1.0)?)?,
+            radius: positive("radius", p.float_or("radius", 1.0)?)?,
+            phi_max,
+        },
+        "paraboloid" => {
+            let r = positive("radius", p.float_or("radius", 1.0)?)?;
+            let z0 = finite("zmin", p.float_or("zmin", 0.0)?)?;
+            let z1 = finite("zmax", p.float_or("zmax", 1.0)?)?;
+            let (z_min, z_max) = (z0.min(z1), z0.max(z1));
+            if z_max == 0.0 {
+                // pbrt-v3's curvature is zmax/radius²: 0 makes the paraboloid an unbounded plane.
+                let loc = p.loc_of(if z1 >= z0 { "zmax" } else { "zmin" }).unwrap_or(&n.name_loc);
+                return Err(Error::at(
+                    loc,
+                    "paraboloid: the larger of \"zmin\"/\"zmax\" must not be 0 (it sets the curvature)",
+                ));
+            }
+            QuadricKind::Paraboloid { radius: r, z_min, z_max, phi_max }
+        }
+        "hyperboloid" => {
+            let point = |name: &str, default: [f64; 3]| -> Result<[f64; 3]> {
+                let v = p.point3(name)?.unwrap_or(default);
+                if v.iter().all(|c| c.is_finite()) {
+                    Ok(v)
+                } else {
+                    Err(Error::at(
+                        p.loc_of(name).unwrap_or(&n.name_loc),
+                        format!("hyperboloid \"{name}\" must be finite"),
+                    ))
+                }
+            };
+            let (p1, p2) = (point("p1", [0.0; 3])?, point("p2", [1.0; 3])?);
+            QuadricKind::hyperboloid(p1, p2, phi_max).ok_or_else(|| {
+                Error::at(
+                    p.loc_of("p2").or(p.loc_of("p1")).unwrap_or(&n.name_loc),
+                    format!(
+                        "hyperboloid: the line from p1 {p1:?} to p2 {p2:?} sweeps no surface pbrt-v3 can intersect \
+                         (p1 = p2, p1.z = p2.z, or a line through the z axis such as the defaults; pbrt-v3 never \
+                         finishes building it)"
+                    ),
+                )
+            })?
         }
         _ => {
             let r = positive("radius", p.float_or("radius", 1.0)?)?;
