@@ -46,3 +46,8 @@ fn matches_pbrt_v3(scene: &str) {
 fn cone_paraboloid_hyperboloids_match_pbrt_v3() {
     matches_pbrt_v3("quadrics");
 }
+
+#[test]
+fn flat_cylinder_and_ribbon_curves_match_pbrt_v3() {
+    matches_pbrt_v3("curves");
+}

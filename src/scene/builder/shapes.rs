@@ -10,22 +10,25 @@ use crate::scene::geometry::{ShapeId, ShapeInfo};
 use crate::scene::light::AreaLight;
 use crate::scene::mesh::{TriangleMesh, trianglemesh_params};
 use crate::scene::props::{Capture, schema_has};
+use crate::scene::shapes::curve::Curve;
 use crate::scene::shapes::mesh_data::MeshData;
 use crate::scene::shapes::quadric::{Quadric, QuadricKind};
 use crate::scene::shapes::{obj, ply};
 
 use super::SceneBuilder;
+use super::curves::{CurveSpec, curve_params};
 
 /// pbrt-v3 shapes cachert does not model; they are skipped with a warning rather than failing the scene.
-const UNSUPPORTED_PBRT_SHAPES: [&str; 4] = ["curve", "loopsubdiv", "nurbs", "heightfield"];
+const UNSUPPORTED_PBRT_SHAPES: [&str; 3] = ["loopsubdiv", "nurbs", "heightfield"];
 
 /// The shape types cachert reads.
-const SHAPES: [&str; 9] =
-    ["trianglemesh", "plymesh", "objmesh", "sphere", "disk", "cylinder", "cone", "paraboloid", "hyperboloid"];
+const SHAPES: [&str; 10] =
+    ["trianglemesh", "plymesh", "objmesh", "sphere", "disk", "cylinder", "cone", "paraboloid", "hyperboloid", "curve"];
 
 enum Built {
     Mesh(MeshData),
     Quadric(QuadricKind),
+    Curves(CurveSpec),
     Nothing,
 }
 
@@ -37,6 +40,7 @@ impl SceneBuilder {
             "sphere" | "disk" | "cylinder" | "cone" | "paraboloid" | "hyperboloid" => {
                 Built::Quadric(quadric_params(&n)?)
             }
+            "curve" => Built::Curves(curve_params(&n, &mut self.warnings)?),
             name if UNSUPPORTED_PBRT_SHAPES.contains(&name) => {
                 self.warnings.at(&n.name_loc, format!("pbrt-v3 shape \"{name}\" is not supported by cachert; skipped"));
                 n.params.mark_all_used();
@@ -78,6 +82,20 @@ impl SceneBuilder {
                 };
                 let id = self.add_quadric(q, ShapeInfo { material, area_light: None });
                 self.current_object.is_none().then_some(ShapeId::Quadric(id))
+            }
+            Built::Curves(spec) => {
+                let world_from_object =
+                    xf.to_affine().map_err(|e| Error::at(loc, format!("Shape \"{}\": {e}", n.name)))?;
+                let flip = reverse ^ xf.swaps_handedness();
+                for piece in spec.pieces {
+                    let curve = Curve::new(piece.cp, piece.width, spec.kind, piece.normals, world_from_object, flip)
+                        .ok_or_else(|| Error::at(loc, "curve: a normal \"N\" is zero"))?;
+                    self.add_curve(curve, spec.split_depth, ShapeInfo { material, area_light: None });
+                }
+                if self.gs.area_light.is_some() {
+                    self.warnings.at(loc, "area lights on curves are not supported (pbrt-v3 cannot sample curves); the curve does not emit");
+                }
+                return Ok(());
             }
         };
         self.attach_area_light(shape, loc);

@@ -1,6 +1,7 @@
 //! STAGE 2 (scene): shape data and intersection: mesh readers (PLY, OBJ) produce [`mesh_data::MeshData`];
-//! [`triangle`] and [`quadric`] intersect rays with triangles and analytic shapes.
+//! [`triangle`], [`quadric`] and [`curve`] intersect rays with triangles, analytic shapes and curves.
 
+pub mod curve;
 pub mod mesh_data;
 pub mod obj;
 pub mod ply;
