@@ -126,7 +126,11 @@ impl Geometry {
         let mut si = match hit.prim {
             PrimRef::Triangle { mesh, tri } => triangle_interaction(&meshes[mesh as usize], tri as usize, hit),
             PrimRef::Quadric(q) => {
-                let s = self.accel.quadrics[q as usize].surface(&QuadricHit { t: hit.t, p: hit.quadric_p });
+                let s = self.accel.quadrics[q as usize].surface(&QuadricHit {
+                    t: hit.t,
+                    p: hit.quadric_p,
+                    p_error: hit.quadric_err,
+                });
                 let info = self.quadric_info[q as usize];
                 SurfaceInteraction {
                     p: s.p,

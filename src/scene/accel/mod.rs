@@ -85,6 +85,8 @@ pub struct Hit {
     pub b: [f32; 2],
     /// Object-space hit point of an analytic shape.
     pub quadric_p: DVec3,
+    /// Object-space error bound of `quadric_p`, where the intersection computed one.
+    pub quadric_err: Vec3A,
 }
 
 /// The surface a ray leaves from. A planar triangle cannot block a ray that leaves its own surface
@@ -355,34 +357,40 @@ impl Accel {
         obvhs::traverse!(bvh, node, state, intersect_node::<false>(node, &tr, state.oct_inv4), {
             let it = &level.items[state.primitive_id as usize];
             let r = Ray { t_max: tr.t_max, ..*ray };
-            let found =
-                match it.r {
-                    PrimRef::Triangle { .. } => triangle::intersect(&shear, &it.verts, r.t_max)
-                        .map(|(t, b1, b2)| Hit { t, prim: it.r, instance: None, b: [b1, b2], quadric_p: DVec3::ZERO }),
-                    PrimRef::Quadric(q) => self.quadrics[q as usize].intersect(&r).map(|h| Hit {
+            let found = match it.r {
+                PrimRef::Triangle { .. } => triangle::intersect(&shear, &it.verts, r.t_max).map(|(t, b1, b2)| Hit {
+                    t,
+                    prim: it.r,
+                    instance: None,
+                    b: [b1, b2],
+                    quadric_p: DVec3::ZERO,
+                    quadric_err: Vec3A::ZERO,
+                }),
+                PrimRef::Quadric(q) => self.quadrics[q as usize].intersect(&r).map(|h| Hit {
+                    t: h.t,
+                    prim: it.r,
+                    instance: None,
+                    b: [0.0; 2],
+                    quadric_p: h.p,
+                    quadric_err: h.p_error,
+                }),
+                PrimRef::Curve(c) => {
+                    let seg = &self.curve_segments[c as usize];
+                    self.curves[seg.curve as usize].intersect(seg, &r, false).map(|h| Hit {
                         t: h.t,
                         prim: it.r,
                         instance: None,
-                        b: [0.0; 2],
-                        quadric_p: h.p,
-                    }),
-                    PrimRef::Curve(c) => {
-                        let seg = &self.curve_segments[c as usize];
-                        self.curves[seg.curve as usize].intersect(seg, &r, false).map(|h| Hit {
-                            t: h.t,
-                            prim: it.r,
-                            instance: None,
-                            b: [h.u, h.v],
-                            quadric_p: DVec3::ZERO,
-                        })
-                    }
-                    PrimRef::Instance(i) => {
-                        let inst = &self.instances[i as usize];
-                        let local = inst.local_ray(ray, r.t_max);
-                        self.nearest(&self.objects[inst.object as usize], &local)
-                            .map(|h| Hit { instance: Some(i), ..h })
-                    }
-                };
+                        b: [h.u, h.v],
+                        quadric_p: DVec3::ZERO,
+                        quadric_err: Vec3A::ZERO,
+                    })
+                }
+                PrimRef::Instance(i) => {
+                    let inst = &self.instances[i as usize];
+                    let local = inst.local_ray(ray, r.t_max);
+                    self.nearest(&self.objects[inst.object as usize], &local).map(|h| Hit { instance: Some(i), ..h })
+                }
+            };
             if let Some(h) = found.filter(|h| h.t < tr.t_max) {
                 tr.t_max = h.t;
                 best = Some(h);
