@@ -80,7 +80,7 @@ pub(super) fn curve_params(n: &Named, warnings: &mut Warnings) -> Result<CurveSp
     let ncp = cp.len();
     let n_pieces = if bezier {
         // The first piece has degree + 1 points; each further one reuses the last and adds `degree`.
-        if ncp < degree + 1 || (ncp - 1 - degree) % degree != 0 {
+        if ncp < degree + 1 || !(ncp - 1 - degree).is_multiple_of(degree) {
             return Err(Error::at(
                 &at("P"),
                 format!(
@@ -141,7 +141,7 @@ pub(super) fn curve_params(n: &Named, warnings: &mut Warnings) -> Result<CurveSp
         _ => p.int("splitdepth")?.map(|i| i as f64),
     }
     .unwrap_or(3.0);
-    if !(split >= 0.0) {
+    if split.is_nan() || split < 0.0 {
         return Err(Error::at(&at("splitdepth"), format!("curve \"splitdepth\" must not be negative, got {split}")));
     }
     let split_depth = if split > MAX_SPLIT_DEPTH as f64 {

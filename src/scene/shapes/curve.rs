@@ -332,8 +332,9 @@ impl Curve {
         }
         let (pc, dpcdw) = eval_bezier(cp, w.clamp(0.0, 1.0));
         let dist2 = pc.x * pc.x + pc.y * pc.y;
-        // Written so NaN (a zero-width ribbon seen edge on) counts as a miss.
-        if !(dist2 <= hit_width * hit_width * 0.25) || pc.z < 0.0 || pc.z > q.z_max {
+        // Written so NaN counts as a miss.
+        let within = dist2 <= hit_width * hit_width * 0.25;
+        if !within || pc.z < 0.0 || pc.z > q.z_max {
             return false;
         }
         let dist = dist2.sqrt();
