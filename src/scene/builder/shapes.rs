@@ -86,9 +86,12 @@ impl SceneBuilder {
             Built::Curves(spec) => {
                 let world_from_object =
                     xf.to_affine().map_err(|e| Error::at(loc, format!("Shape \"{}\": {e}", n.name)))?;
+                let object_from_world =
+                    xf.inverse().to_affine().map_err(|e| Error::at(loc, format!("Shape \"{}\": {e}", n.name)))?;
                 let flip = reverse ^ xf.swaps_handedness();
+                let placement = [world_from_object, object_from_world];
                 for piece in spec.pieces {
-                    let curve = Curve::new(piece.cp, piece.width, spec.kind, piece.normals, world_from_object, flip)
+                    let curve = Curve::new(piece.cp, piece.width, spec.kind, piece.normals, placement, flip)
                         .ok_or_else(|| Error::at(loc, "curve: a normal \"N\" is zero"))?;
                     self.add_curve(curve, spec.split_depth, ShapeInfo { material, area_light: None });
                 }

@@ -168,13 +168,14 @@ struct Query {
 }
 
 impl Curve {
-    /// A curve piece; `normals` (ribbons) are normalised here. `None` if a normal is zero or not finite.
+    /// A curve piece placed by `world_from_object` (and its inverse `object_from_world`); `normals`
+    /// (ribbons) are normalised here. `None` if a normal is zero or not finite.
     pub fn new(
         cp: [Vec3A; 4],
         width: [f32; 2],
         kind: CurveType,
         normals: Option<[Vec3A; 2]>,
-        world_from_object: Affine3A,
+        [world_from_object, object_from_world]: [Affine3A; 2],
         flip_normal: bool,
     ) -> Option<Curve> {
         let (n, normal_angle, inv_sin_normal_angle) = match normals {
@@ -193,7 +194,7 @@ impl Curve {
             normal_angle,
             inv_sin_normal_angle,
             world_from_object,
-            object_from_world: world_from_object.inverse(),
+            object_from_world,
             flip_normal,
         })
     }
@@ -403,7 +404,7 @@ mod tests {
     /// A straight curve along x from (−1, 0, 0) to (1, 0, 0).
     fn straight(kind: CurveType, width: [f32; 2], normals: Option<[Vec3A; 2]>) -> Curve {
         let cp = [-1.0, -1.0 / 3.0, 1.0 / 3.0, 1.0].map(|x| Vec3A::new(x, 0.0, 0.0));
-        Curve::new(cp, width, kind, normals, Affine3A::IDENTITY, false).unwrap()
+        Curve::new(cp, width, kind, normals, [Affine3A::IDENTITY; 2], false).unwrap()
     }
 
     fn first_hit(c: &Curve, ray: &Ray, split: u32) -> Option<(CurveHit, CurveSurface)> {
@@ -487,7 +488,7 @@ mod tests {
             Vec3A::new(1.0, 0.0, 0.0),
         ];
         let m = Affine3A::from_translation(glam::Vec3::new(0.5, 1.0, -2.0)) * Affine3A::from_rotation_z(0.4);
-        let c = Curve::new(cp, [0.1, 0.1], CurveType::Cylinder, None, m, false).unwrap();
+        let c = Curve::new(cp, [0.1, 0.1], CurveType::Cylinder, None, [m, m.inverse()], false).unwrap();
         for i in 1..20 {
             let u = i as f32 / 20.0;
             let p = m.transform_point3a(eval_bezier(&c.cp, u).0);
@@ -514,12 +515,13 @@ mod tests {
                 [1.0, 1.0],
                 CurveType::Ribbon,
                 Some([Vec3A::ZERO, Vec3A::Z]),
-                Affine3A::IDENTITY,
+                [Affine3A::IDENTITY; 2],
                 false
             )
             .is_none()
         );
-        let c = Curve::new([Vec3A::ZERO; 4], [1.0, 1.0], CurveType::Flat, None, Affine3A::IDENTITY, false).unwrap();
+        let c =
+            Curve::new([Vec3A::ZERO; 4], [1.0, 1.0], CurveType::Flat, None, [Affine3A::IDENTITY; 2], false).unwrap();
         let ray = Ray::new(Vec3A::new(0.0, 0.0, 1.0), -Vec3A::Z);
         for s in c.segments(0, 2) {
             if let Some(h) = c.intersect(&s, &ray, false) {
