@@ -203,7 +203,8 @@ fn unknown_shape_type() {
         "Shape \"spher\"",
         6,
         7,
-        "unknown shape type \"spher\"; expected one of trianglemesh, plymesh, objmesh, sphere, disk, cylinder",
+        "unknown shape type \"spher\"; expected one of trianglemesh, plymesh, objmesh, sphere, disk, cylinder, cone, \
+         paraboloid, hyperboloid, curve, loopsubdiv, heightfield, nurbs",
     );
 }
 
@@ -442,7 +443,7 @@ fn binary_prints_location_and_caret_and_exits_2() {
         assert_eq!(
             stderr(&o),
             "error: bad.pbrt:6:9: unknown shape type \"spher\"; expected one of trianglemesh, plymesh, objmesh, \
-             sphere, disk, cylinder\n    Shape \"spher\" \"float radius\" [1]\n          ^\n",
+             sphere, disk, cylinder, cone, paraboloid, hyperboloid, curve, loopsubdiv, heightfield, nurbs\n    Shape \"spher\" \"float radius\" [1]\n          ^\n",
             "{cmd}"
         );
     }

@@ -1,4 +1,4 @@
-//! STAGE 2 (scene): everything a ray can hit — world meshes, object definitions, analytic shapes and the
+//! STAGE 2 (scene): everything a ray can hit — world meshes, object definitions, analytic shapes, curves and the
 //! acceleration structure over them — and the surface interaction at a hit (position with its error
 //! bound, geometric and shading normals, uv, material), computed as pbrt-v3 does.
 
@@ -7,6 +7,7 @@ use glam::Vec3A;
 use crate::scene::accel::{Accel, Hit, OccluderHint, PrimOrigin, PrimRef};
 use crate::scene::mesh::TriangleMesh;
 use crate::scene::ray::{Ray, gamma, offset_ray_origin};
+use crate::scene::shapes::curve::CurveHit;
 use crate::scene::shapes::quadric::{QuadricHit, transform_normal, transform_point_with_error};
 
 /// A shape that can carry an area light.
@@ -45,6 +46,8 @@ pub struct Geometry {
     pub objects: Vec<ObjectDef>,
     /// Material/emission of each analytic shape (same index as `accel.quadrics`).
     pub quadric_info: Vec<ShapeInfo>,
+    /// Material of each curve piece (same index as `accel.curves`; curves never emit).
+    pub curve_info: Vec<ShapeInfo>,
     /// The BVHs.
     pub accel: Accel,
 }
@@ -123,7 +126,11 @@ impl Geometry {
         let mut si = match hit.prim {
             PrimRef::Triangle { mesh, tri } => triangle_interaction(&meshes[mesh as usize], tri as usize, hit),
             PrimRef::Quadric(q) => {
-                let s = self.accel.quadrics[q as usize].surface(&QuadricHit { t: hit.t, p: hit.quadric_p });
+                let s = self.accel.quadrics[q as usize].surface(&QuadricHit {
+                    t: hit.t,
+                    p: hit.quadric_p,
+                    p_error: hit.quadric_err,
+                });
                 let info = self.quadric_info[q as usize];
                 SurfaceInteraction {
                     p: s.p,
@@ -135,6 +142,31 @@ impl Geometry {
                     uv: s.uv,
                     material: info.material,
                     area_light: info.area_light,
+                    origin: PrimOrigin { prim: hit.prim, instance: hit.instance },
+                }
+            }
+            PrimRef::Curve(c) => {
+                let seg = &self.accel.curve_segments[c as usize];
+                // The curve's normal depends on the ray, seen in the space the curve was placed in.
+                let local = match hit.instance {
+                    Some(i) => {
+                        let m = &self.accel.instance(i).object_from_world;
+                        Ray { o: m.transform_point3a(ray.o), d: m.transform_vector3a(ray.d), t_max: ray.t_max }
+                    }
+                    None => *ray,
+                };
+                let [u, v] = hit.b;
+                let s = self.accel.curves[seg.curve as usize].surface(&local, &CurveHit { t: hit.t, u, v });
+                SurfaceInteraction {
+                    p: s.p,
+                    p_error: s.p_error,
+                    t: hit.t,
+                    ng: s.n,
+                    ns: s.n,
+                    dpdu: s.dpdu,
+                    uv: s.uv,
+                    material: self.curve_info[seg.curve as usize].material,
+                    area_light: None,
                     origin: PrimOrigin { prim: hit.prim, instance: hit.instance },
                 }
             }

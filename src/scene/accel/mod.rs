@@ -1,7 +1,7 @@
 //! STAGE 2 (scene): the ray-tracing acceleration structure — the only module that knows obvhs.
 //!
 //! Two levels, as pbrt-v3 builds them: one compressed wide BVH (CWBVH, obvhs) over the world's triangles,
-//! analytic shapes and object instances, and one BVH per object definition, shared by all its instances
+//! analytic shapes, curve segments and object instances, and one BVH per object definition, shared by all its instances
 //! (never flattened). Two queries: [`Accel::intersect`] (nearest hit) and [`Accel::occluded`] (any hit
 //! before t_max). Primitive data is stored in BVH leaf order so a leaf's triangles sit next to each other.
 
@@ -15,6 +15,7 @@ use obvhs::{Boundable, BvhBuildParams};
 use rayon::prelude::*;
 
 use crate::scene::ray::Ray;
+use crate::scene::shapes::curve::{Curve, CurveSegment};
 use crate::scene::shapes::quadric::{Quadric, transform_bounds};
 use crate::scene::shapes::triangle::{self, RayShear};
 
@@ -33,6 +34,8 @@ pub enum PrimRef {
     },
     /// An analytic shape (index into [`Accel::quadrics`]).
     Quadric(u32),
+    /// A segment of a curve (index into [`Accel::curve_segments`]).
+    Curve(u32),
     /// An object instance (index into the instance list); only in the top level.
     Instance(u32),
 }
@@ -78,10 +81,12 @@ pub struct Hit {
     pub prim: PrimRef,
     /// The instance the ray entered, if any.
     pub instance: Option<u32>,
-    /// Barycentric coordinates (b1, b2) of a triangle hit.
+    /// Barycentric coordinates (b1, b2) of a triangle hit; (u, v) of a curve hit.
     pub b: [f32; 2],
     /// Object-space hit point of an analytic shape.
     pub quadric_p: DVec3,
+    /// Object-space error bound of `quadric_p`, where the intersection computed one.
+    pub quadric_err: Vec3A,
 }
 
 /// The surface a ray leaves from. A planar triangle cannot block a ray that leaves its own surface
@@ -142,7 +147,7 @@ impl std::fmt::Debug for Level {
 }
 
 impl Level {
-    fn build(prims: &[BuildPrim], quadrics: &[Quadric], instance_box: &dyn Fn(u32) -> Option<(Vec3A, Vec3A)>) -> Level {
+    fn build(prims: &[BuildPrim], shapes: &Shapes<'_>, instance_box: &dyn Fn(u32) -> Option<(Vec3A, Vec3A)>) -> Level {
         let boxes: Vec<Option<(Vec3A, Vec3A)>> = prims
             .iter()
             .map(|p| match p.r {
@@ -155,7 +160,11 @@ impl Level {
                     }
                     Some((a.min(b).min(c), a.max(b).max(c)))
                 }
-                PrimRef::Quadric(q) => Some(quadrics[q as usize].world_bounds()),
+                PrimRef::Quadric(q) => Some(shapes.quadrics[q as usize].world_bounds()),
+                PrimRef::Curve(c) => {
+                    let seg = &shapes.curve_segments[c as usize];
+                    Some(shapes.curves[seg.curve as usize].world_bounds(seg))
+                }
                 PrimRef::Instance(i) => instance_box(i),
             })
             .collect();
@@ -196,6 +205,13 @@ impl Level {
     }
 }
 
+/// The analytic shapes and curves a level's primitives refer to.
+struct Shapes<'a> {
+    quadrics: &'a [Quadric],
+    curves: &'a [Curve],
+    curve_segments: &'a [CurveSegment],
+}
+
 /// The two-level acceleration structure of a scene.
 #[derive(Debug, Default)]
 pub struct Accel {
@@ -204,6 +220,10 @@ pub struct Accel {
     instances: Vec<InstanceXf>,
     /// Every analytic shape, world-level and object-level alike.
     pub quadrics: Vec<Quadric>,
+    /// Every curve piece, world-level and object-level alike.
+    pub curves: Vec<Curve>,
+    /// The segments of the curves (each a primitive).
+    pub curve_segments: Vec<CurveSegment>,
 }
 
 impl Accel {
@@ -215,16 +235,29 @@ impl Accel {
         instances: Vec<InstanceXf>,
         quadrics: Vec<Quadric>,
     ) -> Accel {
+        Self::build_with_curves(top, objects, instances, quadrics, Vec::new(), Vec::new())
+    }
+
+    /// [`Accel::build`] for scenes with curves: `curve_segments` are the primitives
+    /// [`PrimRef::Curve`] refers to, each of a curve in `curves`.
+    pub fn build_with_curves(
+        top: Vec<BuildPrim>,
+        objects: Vec<Vec<BuildPrim>>,
+        instances: Vec<InstanceXf>,
+        quadrics: Vec<Quadric>,
+        curves: Vec<Curve>,
+        curve_segments: Vec<CurveSegment>,
+    ) -> Accel {
+        let shapes = Shapes { quadrics: &quadrics, curves: &curves, curve_segments: &curve_segments };
         let no_instances = |_| None;
-        let objects: Vec<Level> =
-            objects.par_iter().map(|prims| Level::build(prims, &quadrics, &no_instances)).collect();
+        let objects: Vec<Level> = objects.par_iter().map(|prims| Level::build(prims, &shapes, &no_instances)).collect();
         let instance_box = |i: u32| {
             let inst = instances.get(i as usize)?;
             let (lo, hi) = objects.get(inst.object as usize)?.bounds?;
             Some(transform_bounds(&inst.world_from_object, lo, hi))
         };
-        let top = Level::build(&top, &quadrics, &instance_box);
-        Accel { top, objects, instances, quadrics }
+        let top = Level::build(&top, &shapes, &instance_box);
+        Accel { top, objects, instances, quadrics, curves, curve_segments }
     }
 
     /// World bounds of everything, if anything.
@@ -306,6 +339,10 @@ impl Accel {
         match it.r {
             PrimRef::Triangle { .. } => triangle::intersect(shear, &it.verts, ray.t_max).is_some(),
             PrimRef::Quadric(q) => self.quadrics[q as usize].intersect(ray).is_some(),
+            PrimRef::Curve(c) => {
+                let seg = &self.curve_segments[c as usize];
+                self.curves[seg.curve as usize].intersect(seg, ray, true).is_some()
+            }
             PrimRef::Instance(_) => false,
         }
     }
@@ -320,24 +357,40 @@ impl Accel {
         obvhs::traverse!(bvh, node, state, intersect_node::<false>(node, &tr, state.oct_inv4), {
             let it = &level.items[state.primitive_id as usize];
             let r = Ray { t_max: tr.t_max, ..*ray };
-            let found =
-                match it.r {
-                    PrimRef::Triangle { .. } => triangle::intersect(&shear, &it.verts, r.t_max)
-                        .map(|(t, b1, b2)| Hit { t, prim: it.r, instance: None, b: [b1, b2], quadric_p: DVec3::ZERO }),
-                    PrimRef::Quadric(q) => self.quadrics[q as usize].intersect(&r).map(|h| Hit {
+            let found = match it.r {
+                PrimRef::Triangle { .. } => triangle::intersect(&shear, &it.verts, r.t_max).map(|(t, b1, b2)| Hit {
+                    t,
+                    prim: it.r,
+                    instance: None,
+                    b: [b1, b2],
+                    quadric_p: DVec3::ZERO,
+                    quadric_err: Vec3A::ZERO,
+                }),
+                PrimRef::Quadric(q) => self.quadrics[q as usize].intersect(&r).map(|h| Hit {
+                    t: h.t,
+                    prim: it.r,
+                    instance: None,
+                    b: [0.0; 2],
+                    quadric_p: h.p,
+                    quadric_err: h.p_error,
+                }),
+                PrimRef::Curve(c) => {
+                    let seg = &self.curve_segments[c as usize];
+                    self.curves[seg.curve as usize].intersect(seg, &r, false).map(|h| Hit {
                         t: h.t,
                         prim: it.r,
                         instance: None,
-                        b: [0.0; 2],
-                        quadric_p: h.p,
-                    }),
-                    PrimRef::Instance(i) => {
-                        let inst = &self.instances[i as usize];
-                        let local = inst.local_ray(ray, r.t_max);
-                        self.nearest(&self.objects[inst.object as usize], &local)
-                            .map(|h| Hit { instance: Some(i), ..h })
-                    }
-                };
+                        b: [h.u, h.v],
+                        quadric_p: DVec3::ZERO,
+                        quadric_err: Vec3A::ZERO,
+                    })
+                }
+                PrimRef::Instance(i) => {
+                    let inst = &self.instances[i as usize];
+                    let local = inst.local_ray(ray, r.t_max);
+                    self.nearest(&self.objects[inst.object as usize], &local).map(|h| Hit { instance: Some(i), ..h })
+                }
+            };
             if let Some(h) = found.filter(|h| h.t < tr.t_max) {
                 tr.t_max = h.t;
                 best = Some(h);

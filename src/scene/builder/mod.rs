@@ -7,6 +7,7 @@
 //! directive or parameter that caused it.
 
 mod appearance;
+mod curves;
 mod options;
 mod shapes;
 mod state;
@@ -24,6 +25,7 @@ use crate::scene::geometry::{Geometry, ObjectDef, ShapeInfo};
 use crate::scene::light::{AreaLight, Light};
 use crate::scene::material::Material;
 use crate::scene::mesh::TriangleMesh;
+use crate::scene::shapes::curve::{Curve, CurveSegment};
 use crate::scene::shapes::quadric::Quadric;
 use crate::scene::texture::Texture;
 use crate::scene::transform::Transform;
@@ -77,6 +79,9 @@ pub(crate) struct SceneBuilder {
     top: Vec<BuildPrim>,
     quadrics: Vec<Quadric>,
     quadric_info: Vec<ShapeInfo>,
+    curves: Vec<Curve>,
+    curve_segments: Vec<CurveSegment>,
+    curve_info: Vec<ShapeInfo>,
     objects: Vec<ObjectRecord>,
     object_names: HashMap<String, u32>,
     current_object: Option<u32>,
@@ -114,6 +119,9 @@ impl SceneBuilder {
             top: Vec::new(),
             quadrics: Vec::new(),
             quadric_info: Vec::new(),
+            curves: Vec::new(),
+            curve_segments: Vec::new(),
+            curve_info: Vec::new(),
             objects: Vec::new(),
             object_names: HashMap::new(),
             current_object: None,
@@ -277,17 +285,20 @@ impl SceneBuilder {
         let objects: Vec<ObjectRecord> = std::mem::take(&mut self.objects);
         let (defs, object_prims): (Vec<ObjectDef>, Vec<Vec<BuildPrim>>) =
             objects.into_iter().map(|o| (o.def, o.prims)).unzip();
-        let accel = Accel::build(
+        let accel = Accel::build_with_curves(
             std::mem::take(&mut self.top),
             object_prims,
             std::mem::take(&mut self.instances),
             std::mem::take(&mut self.quadrics),
+            std::mem::take(&mut self.curves),
+            std::mem::take(&mut self.curve_segments),
         );
         stats.bvh_secs = t.elapsed().as_secs_f64();
         let geometry = Geometry {
             meshes: std::mem::take(&mut self.meshes),
             objects: defs,
             quadric_info: std::mem::take(&mut self.quadric_info),
+            curve_info: std::mem::take(&mut self.curve_info),
             accel,
         };
         stats.shapes = self.shape_count;
@@ -348,6 +359,22 @@ impl SceneBuilder {
             None => self.top.push(prim),
         }
         id
+    }
+
+    /// Adds a curve piece, split into 2^`split_depth` segment primitives, to the world or to the object
+    /// being defined.
+    fn add_curve(&mut self, curve: Curve, split_depth: u32, info: ShapeInfo) {
+        let id = self.curves.len() as u32;
+        let first = self.curve_segments.len() as u32;
+        self.curve_segments.extend(curve.segments(id, split_depth));
+        let last = self.curve_segments.len() as u32;
+        self.curves.push(curve);
+        self.curve_info.push(info);
+        let prims = (first..last).map(|s| BuildPrim { r: PrimRef::Curve(s), verts: [[0.0; 3]; 3] });
+        match self.current_object {
+            Some(o) => self.objects[o as usize].prims.extend(prims),
+            None => self.top.extend(prims),
+        }
     }
 }
 

@@ -1,6 +1,6 @@
 //! STAGE 2 (scene builder): the Shape directive — trianglemesh, plymesh, objmesh (our extension), sphere,
-//! disk, cylinder, and the meshes pbrt-v3 builds for loopsubdiv, heightfield and nurbs — with pbrt-v3's
-//! per-shape material overrides and area lights.
+//! disk, cylinder, cone, paraboloid, hyperboloid, curve, and the meshes pbrt-v3 builds for loopsubdiv,
+//! heightfield and nurbs — with pbrt-v3's per-shape material overrides and area lights.
 
 use std::f64::consts::TAU;
 use std::rc::Rc;
@@ -11,6 +11,7 @@ use crate::scene::geometry::{ShapeId, ShapeInfo};
 use crate::scene::light::AreaLight;
 use crate::scene::mesh::{TriangleMesh, trianglemesh_params};
 use crate::scene::props::{Capture, schema_has};
+use crate::scene::shapes::curve::Curve;
 use crate::scene::shapes::heightfield::heightfield_params;
 use crate::scene::shapes::loopsubdiv::loopsubdiv_params;
 use crate::scene::shapes::mesh_data::MeshData;
@@ -19,18 +20,29 @@ use crate::scene::shapes::quadric::{Quadric, QuadricKind};
 use crate::scene::shapes::{obj, ply};
 
 use super::SceneBuilder;
+use super::curves::{CurveSpec, curve_params};
 
-/// pbrt-v3 shapes cachert does not model; they are skipped with a warning rather than failing the scene.
-const UNSUPPORTED_PBRT_SHAPES: [&str; 4] = ["cone", "paraboloid", "hyperboloid", "curve"];
-
-/// The shape types cachert reads.
-const SHAPES: [&str; 9] =
-    ["trianglemesh", "plymesh", "objmesh", "sphere", "disk", "cylinder", "loopsubdiv", "heightfield", "nurbs"];
+/// The shape types cachert reads: every pbrt-v3 shape, plus `objmesh`.
+const SHAPES: [&str; 13] = [
+    "trianglemesh",
+    "plymesh",
+    "objmesh",
+    "sphere",
+    "disk",
+    "cylinder",
+    "cone",
+    "paraboloid",
+    "hyperboloid",
+    "curve",
+    "loopsubdiv",
+    "heightfield",
+    "nurbs",
+];
 
 enum Built {
     Mesh(MeshData),
     Quadric(QuadricKind),
-    Nothing,
+    Curves(CurveSpec),
 }
 
 impl SceneBuilder {
@@ -41,12 +53,10 @@ impl SceneBuilder {
             "loopsubdiv" => Built::Mesh(loopsubdiv_params(&n.params, loc, &mut self.warnings)?),
             "heightfield" => Built::Mesh(heightfield_params(&n.params, loc)?),
             "nurbs" => Built::Mesh(nurbs_params(&n.params, loc, &mut self.warnings)?),
-            "sphere" | "disk" | "cylinder" => Built::Quadric(quadric_params(&n)?),
-            name if UNSUPPORTED_PBRT_SHAPES.contains(&name) => {
-                self.warnings.at(&n.name_loc, format!("pbrt-v3 shape \"{name}\" is not supported by cachert; skipped"));
-                n.params.mark_all_used();
-                Built::Nothing
+            "sphere" | "disk" | "cylinder" | "cone" | "paraboloid" | "hyperboloid" => {
+                Built::Quadric(quadric_params(&n)?)
             }
+            "curve" => Built::Curves(curve_params(&n, &mut self.warnings)?),
             other => {
                 return Err(Error::at(
                     &n.name_loc,
@@ -65,7 +75,6 @@ impl SceneBuilder {
         let xf = self.ctm[0];
         let reverse = self.gs.reverse_orientation;
         let shape = match built {
-            Built::Nothing => return Ok(()),
             Built::Mesh(data) => {
                 let mesh = TriangleMesh::place(data, &xf, reverse, material)
                     .map_err(|e| Error::at(loc, format!("Shape \"{}\": {e}", n.name)))?;
@@ -84,6 +93,23 @@ impl SceneBuilder {
                 };
                 let id = self.add_quadric(q, ShapeInfo { material, area_light: None });
                 self.current_object.is_none().then_some(ShapeId::Quadric(id))
+            }
+            Built::Curves(spec) => {
+                let world_from_object =
+                    xf.to_affine().map_err(|e| Error::at(loc, format!("Shape \"{}\": {e}", n.name)))?;
+                let object_from_world =
+                    xf.inverse().to_affine().map_err(|e| Error::at(loc, format!("Shape \"{}\": {e}", n.name)))?;
+                let flip = reverse ^ xf.swaps_handedness();
+                let placement = [world_from_object, object_from_world];
+                for piece in spec.pieces {
+                    let curve = Curve::new(piece.cp, piece.width, spec.kind, piece.normals, placement, flip)
+                        .ok_or_else(|| Error::at(loc, "curve: a normal \"N\" is zero"))?;
+                    self.add_curve(curve, spec.split_depth, ShapeInfo { material, area_light: None });
+                }
+                if self.gs.area_light.is_some() {
+                    self.warnings.at(loc, "area lights on curves are not supported (pbrt-v3 cannot sample curves); the curve does not emit");
+                }
+                return Ok(());
             }
         };
         self.attach_area_light(shape, loc);
@@ -161,7 +187,7 @@ impl SceneBuilder {
     }
 }
 
-/// Reads sphere/disk/cylinder parameters with pbrt-v3's defaults and clamping.
+/// Reads sphere/disk/cylinder/cone/paraboloid/hyperboloid parameters with pbrt-v3's defaults and clamping.
 fn quadric_params(n: &Named) -> Result<QuadricKind> {
     let p = &n.params;
     let positive = |name: &str, v: f64| -> Result<f64> {
@@ -198,6 +224,50 @@ fn quadric_params(n: &Named) -> Result<QuadricKind> {
                 inner_radius: inner,
                 phi_max,
             }
+        }
+        "cone" => QuadricKind::Cone {
+            height: positive("height", p.float_or("height", 1.0)?)?,
+            radius: positive("radius", p.float_or("radius", 1.0)?)?,
+            phi_max,
+        },
+        "paraboloid" => {
+            let r = positive("radius", p.float_or("radius", 1.0)?)?;
+            let z0 = finite("zmin", p.float_or("zmin", 0.0)?)?;
+            let z1 = finite("zmax", p.float_or("zmax", 1.0)?)?;
+            let (z_min, z_max) = (z0.min(z1), z0.max(z1));
+            if z_max == 0.0 {
+                // pbrt-v3's curvature is zmax/radius²: 0 makes the paraboloid an unbounded plane.
+                let loc = p.loc_of(if z1 >= z0 { "zmax" } else { "zmin" }).unwrap_or(&n.name_loc);
+                return Err(Error::at(
+                    loc,
+                    "paraboloid: the larger of \"zmin\"/\"zmax\" must not be 0 (it sets the curvature)",
+                ));
+            }
+            QuadricKind::Paraboloid { radius: r, z_min, z_max, phi_max }
+        }
+        "hyperboloid" => {
+            let point = |name: &str, default: [f64; 3]| -> Result<[f64; 3]> {
+                let v = p.point3(name)?.unwrap_or(default);
+                if v.iter().all(|c| c.is_finite()) {
+                    Ok(v)
+                } else {
+                    Err(Error::at(
+                        p.loc_of(name).unwrap_or(&n.name_loc),
+                        format!("hyperboloid \"{name}\" must be finite"),
+                    ))
+                }
+            };
+            let (p1, p2) = (point("p1", [0.0; 3])?, point("p2", [1.0; 3])?);
+            QuadricKind::hyperboloid(p1, p2, phi_max).ok_or_else(|| {
+                Error::at(
+                    p.loc_of("p2").or(p.loc_of("p1")).unwrap_or(&n.name_loc),
+                    format!(
+                        "hyperboloid: the line from p1 {p1:?} to p2 {p2:?} sweeps no surface pbrt-v3 can intersect \
+                         (p1 = p2, p1.z = p2.z, or a line through the z axis such as the defaults; pbrt-v3 never \
+                         finishes building it)"
+                    ),
+                )
+            })?
         }
         _ => {
             let r = positive("radius", p.float_or("radius", 1.0)?)?;

@@ -1,7 +1,8 @@
 //! STAGE 2 (scene): shape data and intersection: mesh readers (PLY, OBJ) and the mesh-producing pbrt-v3
-//! shapes ([`loopsubdiv`], [`heightfield`], [`nurbs`]) produce [`mesh_data::MeshData`];
-//! [`triangle`] and [`quadric`] intersect rays with triangles and analytic shapes.
+//! shapes ([`loopsubdiv`], [`heightfield`], [`nurbs`]) produce [`mesh_data::MeshData`]; [`triangle`],
+//! [`quadric`] and [`curve`] intersect rays with triangles, analytic shapes and curves.
 
+pub mod curve;
 pub mod heightfield;
 pub mod loopsubdiv;
 pub mod mesh_data;
