@@ -10,36 +10,15 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use cachert::image;
-use cachert::metrics::rmse;
-use cachert::scene::{LoadOptions, LoadedScene, load, load_str};
-use common::{header, mean, render_loaded, settings};
+use cachert::scene::{LoadOptions, LoadedScene, load_str};
+use common::header;
 
 fn data_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/pbrt-v3/shapes-analytic")
 }
 
 fn matches_pbrt_v3(scene: &str) {
-    let dir = data_dir();
-    let loaded = load(&dir.join(format!("{scene}.pbrt")), LoadOptions::default()).expect("loads");
-    assert_eq!(loaded.warnings.len(), 0, "{scene}: {:?}", loaded.warnings);
-    let out = render_loaded(&loaded, &settings(4)).expect("renders");
-    let a = image::read(&dir.join(format!("{scene}-a.pfm"))).expect("reference a");
-    let b = image::read(&dir.join(format!("{scene}-b.pfm"))).expect("reference b");
-    let floor = rmse(&b, &a).expect("same size");
-    let err = rmse(&out.image, &a).expect("same size");
-    let (ours, theirs) = (mean(&out.image), mean(&a));
-    let dev = (ours - theirs).abs() / theirs;
-    if let Some(dump) = std::env::var_os("CACHERT_DUMP_DIR") {
-        image::write(&out.image, &Path::new(&dump).join(format!("{scene}-ours.pfm"))).expect("dump");
-    }
-    eprintln!(
-        "{scene}: RMSE {err:.4}, pbrt-v3 floor {floor:.4}, ratio {:.3}; mean {ours:.4} vs {theirs:.4} ({:.3} %)",
-        err / floor,
-        100.0 * dev
-    );
-    assert!(err <= 1.3 * floor, "{scene}: RMSE {err} is {:.2}× pbrt-v3's noise floor {floor}", err / floor);
-    assert!(dev <= 0.005, "{scene}: mean {ours} vs pbrt-v3's {theirs}");
+    common::file_matches_pbrt_pair(&data_dir(), scene);
 }
 
 #[test]

@@ -12,10 +12,8 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use cachert::image;
-use cachert::metrics::rmse;
 use cachert::scene::{LoadOptions, LoadedScene, load};
-use common::{TempDir, mean, render_loaded, settings, shared_scenes};
+use common::{TempDir, shared_scenes};
 
 fn data_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/pbrt-v3/shapes-mesh")
@@ -23,29 +21,7 @@ fn data_dir() -> PathBuf {
 
 /// Loads `<scene>.pbrt` (no warnings allowed), renders it and compares it with pbrt-v3's references.
 fn matches_pbrt_v3(scene: &str) -> LoadedScene {
-    let dir = data_dir();
-    let loaded = load(&dir.join(format!("{scene}.pbrt")), LoadOptions::default()).expect("loads");
-    assert_eq!(loaded.warnings.len(), 0, "{scene}: {:?}", loaded.warnings);
-    let out = render_loaded(&loaded, &settings(4)).expect("renders");
-    let a = image::read(&dir.join(format!("{scene}-a.pfm"))).expect("reference a");
-    let b = image::read(&dir.join(format!("{scene}-b.pfm"))).expect("reference b");
-    let floor = rmse(&b, &a).expect("same size");
-    let err = rmse(&out.image, &a).expect("same size");
-    let (ours, theirs) = (mean(&out.image), mean(&a));
-    let dev = (ours - theirs).abs() / theirs;
-    eprintln!(
-        "{scene}: RMSE {err:.4}, pbrt-v3 floor {floor:.4}, ratio {:.3}; mean {ours:.4} vs {theirs:.4} ({:.3} %)",
-        err / floor,
-        100.0 * dev
-    );
-    if std::env::var_os("CACHERT_KEEP_RENDERS").is_some() {
-        let path = std::env::temp_dir().join(format!("cachert-shapes-mesh-{scene}.pfm"));
-        image::write(&out.image, &path).expect("writes");
-        eprintln!("{scene}: wrote {}", path.display());
-    }
-    assert!(err <= 1.3 * floor, "{scene}: RMSE {err} is {:.2}× pbrt-v3's noise floor {floor}", err / floor);
-    assert!(dev <= 0.005, "{scene}: mean {ours} vs pbrt-v3's {theirs}");
-    loaded
+    common::file_matches_pbrt_pair(&data_dir(), scene)
 }
 
 #[test]

@@ -12,10 +12,8 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use cachert::image;
-use cachert::metrics::rmse;
 use cachert::scene::{LoadOptions, load, load_str};
-use common::{mean, render_loaded, settings};
+use common::{render_loaded, settings};
 
 fn scene_path(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)
@@ -47,19 +45,8 @@ fn matches_pbrt_v3(scene: &str) {
     assert_eq!(loaded.warnings.len(), 0, "{scene}: {:?}", loaded.warnings);
     let out = render_loaded(&loaded, &settings(4)).expect("renders");
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/pbrt-v3");
-    let a = image::read(&data.join(format!("{scene}-a.pfm"))).expect("reference a");
-    let b = image::read(&data.join(format!("{scene}-b.pfm"))).expect("reference b");
-    let floor = rmse(&b, &a).expect("same size");
-    let err = rmse(&out.image, &a).expect("same size");
-    let (ours, theirs) = (mean(&out.image), mean(&a));
-    let dev = (ours - theirs).abs() / theirs;
-    eprintln!(
-        "{scene}: RMSE {err:.4}, pbrt-v3 floor {floor:.4}, ratio {:.3}; mean {ours:.4} vs {theirs:.4} ({:.3} %)",
-        err / floor,
-        100.0 * dev
-    );
-    assert!(err <= 1.3 * floor, "{scene}: RMSE {err} is {:.2}× pbrt-v3's noise floor {floor}", err / floor);
-    assert!(dev <= 0.005, "{scene}: mean {ours} vs pbrt-v3's {theirs}");
+    let (a, b) = (data.join(format!("{scene}-a.pfm")), data.join(format!("{scene}-b.pfm")));
+    common::assert_matches_pbrt_pair(scene, &out.image, &a, &b);
 }
 
 #[test]

@@ -109,3 +109,42 @@ pub fn mean(im: &Image) -> f64 {
     let m = im.mean();
     (m[0] + m[1] + m[2]) / 3.0
 }
+
+/// Compares `ours` with two pbrt-v3 renders of the same scene, `a` and `b`, made with different samplers
+/// (the `tests/data/pbrt-v3/*/make.sh` convention: `a` random, `b` stratified, and ours rendered with `b`'s
+/// settings). RMSE(a, b) is pbrt-v3's noise floor and a correct renderer lands near it from `a`, so this asserts
+/// RMSE(ours, a) ≤ 1.3 × floor and the mean within 0.5 % of `a`'s, printing both. With the environment
+/// variable `CACHERT_DUMP_DIR` set, `ours` is also written there as `<name>-ours.pfm` for inspection.
+pub fn assert_matches_pbrt_pair(name: &str, ours: &Image, a_path: &Path, b_path: &Path) {
+    let a = cachert::image::read(a_path).unwrap_or_else(|e| panic!("{name}: reference a: {e}"));
+    let b = cachert::image::read(b_path).unwrap_or_else(|e| panic!("{name}: reference b: {e}"));
+    let floor = cachert::metrics::rmse(&b, &a).expect("the references have one size");
+    let err = cachert::metrics::rmse(ours, &a).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let (m_ours, m_theirs) = (mean(ours), mean(&a));
+    let dev = (m_ours - m_theirs).abs() / m_theirs;
+    if let Some(dump) = std::env::var_os("CACHERT_DUMP_DIR") {
+        cachert::image::write(ours, &Path::new(&dump).join(format!("{name}-ours.pfm"))).expect("dump");
+    }
+    eprintln!(
+        "{name}: RMSE {err:.4}, pbrt-v3 floor {floor:.4}, ratio {:.3}; mean {m_ours:.4} vs {m_theirs:.4} ({:.3} %)",
+        err / floor,
+        100.0 * dev
+    );
+    assert!(err <= 1.3 * floor, "{name}: RMSE {err} is {:.2}× pbrt-v3's noise floor {floor}", err / floor);
+    assert!(dev <= 0.005, "{name}: mean {m_ours} vs pbrt-v3's {m_theirs}");
+}
+
+/// Loads `<dir>/<scene>.pbrt` (no warnings allowed), renders it with seed 4 and checks it against
+/// `<scene>-a.pfm` and `<scene>-b.pfm` beside it with [`assert_matches_pbrt_pair`].
+pub fn file_matches_pbrt_pair(dir: &Path, scene: &str) -> LoadedScene {
+    let loaded = load(&dir.join(format!("{scene}.pbrt")), LoadOptions::default()).expect("loads");
+    assert_eq!(loaded.warnings.len(), 0, "{scene}: {:?}", loaded.warnings);
+    let out = render_loaded(&loaded, &settings(4)).expect("renders");
+    assert_matches_pbrt_pair(
+        scene,
+        &out.image,
+        &dir.join(format!("{scene}-a.pfm")),
+        &dir.join(format!("{scene}-b.pfm")),
+    );
+    loaded
+}
