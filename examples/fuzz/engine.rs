@@ -128,29 +128,23 @@ fn start_watchdog() {
     });
 }
 
-/// The kind of an outcome: the error message with numbers, quoted text and paths blanked.
+/// The kind of an outcome: the error message as a template. Words made only of letters (and a few
+/// punctuation marks) are kept; numbers, quoted names, paths and anything else become `_`.
 pub fn signature(outcome: &Result<(), String>) -> String {
     let Err(msg) = outcome else { return "ok".into() };
-    let msg = msg.replace("\\\"", "");
-    let mut out = String::new();
-    let mut in_quote = false;
-    for word in msg.split(' ') {
-        let path_like = word.contains('/');
-        if path_like && !in_quote {
-            out.push_str("<path> ");
-            continue;
+    let mut words: Vec<&str> = Vec::new();
+    for word in msg.split_whitespace() {
+        let plain = word.len() <= 24
+            && word.chars().all(|c| c.is_ascii_alphabetic() || matches!(c, ':' | ',' | ';' | '(' | ')' | '-'));
+        let w = if plain { word } else { "_" };
+        if !(w == "_" && words.last() == Some(&"_")) {
+            words.push(w);
         }
-        for c in word.chars() {
-            if c == '"' {
-                in_quote = !in_quote;
-                out.push('"');
-            } else if !in_quote && !c.is_ascii_digit() {
-                out.push(c);
-            }
+        if words.len() >= 16 {
+            break;
         }
-        out.push(' ');
     }
-    out.chars().take(120).collect()
+    words.join(" ")
 }
 
 /// The scratch folder for this process (on tmpfs when there is one).
@@ -277,6 +271,11 @@ pub fn run(cfg: &Config) -> std::io::Result<Report> {
     loop {
         let secs = t0.elapsed().as_secs_f64();
         if secs >= cfg.seconds || cfg.max_inputs.is_some_and(|m| report.inputs >= m) {
+            break;
+        }
+        // `touch <out>/STOP` ends a run early, with its summary.
+        if report.inputs % 512 == 0 && cfg.out.join("STOP").exists() {
+            let _ = std::fs::remove_file(cfg.out.join("STOP"));
             break;
         }
         if cfg.progress_every > 0.0 && secs >= next_progress {

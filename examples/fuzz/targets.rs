@@ -4,6 +4,8 @@ use std::path::{Path, PathBuf};
 
 use cachert::error::Warnings;
 use cachert::image::{self, Image};
+use cachert::render::ao::AmbientOcclusion;
+use cachert::render::params::IntegratorParams;
 use cachert::scene::shapes::{obj, ply};
 use cachert::scene::{LoadOptions, load_str};
 
@@ -440,7 +442,17 @@ impl Target {
             }
             Target::Scene => {
                 let text = String::from_utf8_lossy(input);
-                load_str(&text, &seed.path, LoadOptions::default()).map(drop).map_err(|e| e.to_string())
+                let loaded = load_str(&text, &seed.path, LoadOptions::default()).map_err(|e| e.to_string())?;
+                // The render stage's reading of the integrator's parameters (sample counts, distances).
+                match &loaded.integrator {
+                    Some(named) if named.name == "ambientocclusion" => {
+                        let params = IntegratorParams::new(&named.params, &[]);
+                        AmbientOcclusion::from_params(&params, &loaded.scene.sampler, false)
+                            .map(drop)
+                            .map_err(|e| e.to_string())
+                    }
+                    _ => Ok(()),
+                }
             }
             Target::Ply | Target::Obj | Target::Image => {
                 let path = scratch.join(format!("input.{}", seed.path.display()));
