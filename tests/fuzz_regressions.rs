@@ -184,6 +184,21 @@ fn include_recursion_is_bounded_with_a_clear_error() {
     assert_eq!(e, Some(format!("{d}/chain98.pbrt:1:1: Include nested more than 100 files deep")));
 }
 
+/// Files that include the next one twice, 30 levels deep: no cycle and no deep chain, but 2^30 copies of the
+/// last file's directives. Refused once the included text passes 64 times the distinct files' size.
+#[test]
+fn includes_that_double_at_every_level_are_refused_before_memory_runs_out() {
+    let dir = TempDir::new("fuzz-include-fanout");
+    for k in 0..30 {
+        dir.write(&format!("l{k}.pbrt"), format!("Include \"l{n}.pbrt\"\nInclude \"l{n}.pbrt\"\n", n = k + 1));
+    }
+    dir.write("l30.pbrt", "Shape \"trianglemesh\" \"integer indices\" [0 1 2] \"point P\" [0 0 0 1 0 0 0 1 0]\n");
+    let top = dir.write("top.pbrt", "WorldBegin\nInclude \"l0.pbrt\"\nWorldEnd\n");
+    let e = bounded("fan-out", || load(&top, LoadOptions::default())).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(e.contains(": Include \"l"), "{e}");
+    assert!(e.contains("the included files add up to"), "{e}");
+}
+
 /// An object that instances itself, or any object, while it is being defined.
 #[test]
 fn object_instance_recursion_is_an_error() {
