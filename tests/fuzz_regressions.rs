@@ -11,6 +11,7 @@ use std::path::Path;
 use std::sync::Mutex;
 
 use cachert::Warnings;
+use cachert::image::{self, Image};
 use cachert::render::ao::AmbientOcclusion;
 use cachert::render::params::IntegratorParams;
 use cachert::scene::shapes::{obj, ply};
@@ -257,4 +258,69 @@ fn obj_faces_with_absurd_indices_are_errors_or_dropped() {
             assert!(mesh.indices.iter().all(|&i| (i as usize) < mesh.positions.len()), "{face}: bad index kept");
         }
     }
+}
+
+/// An uncompressed scanline EXR of `w`×`h` float B, G, R pixels whose offset table points every line at
+/// one zero-filled block for line 0 (`all_blocks`: a real block per line instead).
+fn scanline_exr(w: i32, h: i32, all_blocks: bool) -> Vec<u8> {
+    fn attr(out: &mut Vec<u8>, name: &str, ty: &str, data: &[u8]) {
+        for s in [name, ty] {
+            out.extend_from_slice(s.as_bytes());
+            out.push(0);
+        }
+        out.extend_from_slice(&(data.len() as i32).to_le_bytes());
+        out.extend_from_slice(data);
+    }
+    let ints = |v: &[i32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+    let mut chlist = Vec::new();
+    for c in [b'B', b'G', b'R'] {
+        chlist.extend_from_slice(&[c, 0]);
+        chlist.extend_from_slice(&ints(&[2, 0, 1, 1])); // float, pLinear 0 + reserved, sampling 1 1
+    }
+    chlist.push(0);
+    let mut out = vec![0x76, 0x2f, 0x31, 0x01, 2, 0, 0, 0];
+    attr(&mut out, "channels", "chlist", &chlist);
+    attr(&mut out, "compression", "compression", &[0]);
+    attr(&mut out, "dataWindow", "box2i", &ints(&[0, 0, w - 1, h - 1]));
+    attr(&mut out, "displayWindow", "box2i", &ints(&[0, 0, w - 1, h - 1]));
+    attr(&mut out, "lineOrder", "lineOrder", &[0]);
+    attr(&mut out, "pixelAspectRatio", "float", &1f32.to_le_bytes());
+    attr(&mut out, "screenWindowCenter", "v2f", &[0; 8]);
+    attr(&mut out, "screenWindowWidth", "float", &1f32.to_le_bytes());
+    out.push(0);
+    let line = w as usize * 12;
+    let start = (out.len() + 8 * h as usize) as u64;
+    for y in 0..h as u64 {
+        let block = if all_blocks { y } else { 0 };
+        out.extend_from_slice(&(start + block * (8 + line as u64)).to_le_bytes());
+    }
+    for y in 0..if all_blocks { h } else { 1 } {
+        out.extend_from_slice(&ints(&[y, line as i32]));
+        out.resize(out.len() + line, 0);
+    }
+    out
+}
+
+/// Found while fuzzing the image reader: a 330 KB EXR whose header declares 16384×16384 float RGB pixels
+/// but holds one scanline block. The exr crate fills the missing blocks in, so it "read" fine after
+/// 10 s and 6 GB of memory. A layer may now hold at most 1100 times the file size (deflate's best is
+/// 1032:1).
+#[test]
+fn an_exr_declaring_far_more_pixels_than_its_size_is_refused() {
+    let dir = TempDir::new("fuzz-exr");
+    let path = dir.write("big.exr", scanline_exr(16384, 16384, false));
+    let e = bounded("big exr", || image::read(&path)).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(e.contains("EXR header declares 3221225472 bytes of pixel data, more than a"), "{e}");
+    assert!(e.ends_with("file can hold (a corrupt header or missing data)"), "{e}");
+    // Complete files of the same layout read.
+    let path = dir.write("small.exr", scanline_exr(64, 32, true));
+    let img = image::read(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!((img.width, img.height), (64, 32));
+    // A constant image compresses as well as ZIP allows, and still reads back.
+    let black = Image::new(1024, 1024);
+    let path = dir.path("black.exr");
+    image::write(&black, &path).unwrap_or_else(|e| panic!("{e}"));
+    let size = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
+    assert!(size < 1024 * 1024 * 12 / 500, "{size} bytes: the bound is not exercised");
+    assert_eq!(image::read(&path).unwrap_or_else(|e| panic!("{e}")), black);
 }

@@ -353,7 +353,9 @@ impl Target {
     pub fn max_len(self) -> usize {
         match self {
             Target::Parse | Target::Scene => 256 << 10,
-            Target::Ply | Target::Obj | Target::Image => 128 << 10,
+            Target::Ply | Target::Obj => 128 << 10,
+            // EXR may hold 1100 times its size in pixels: 64 KiB keeps a decode well under 1 GiB.
+            Target::Image => 64 << 10,
         }
     }
 
