@@ -70,7 +70,9 @@ fn real_main() -> Result<ExitCode, String> {
                 return Ok(ExitCode::SUCCESS);
             }
             other if replay.is_some() && !other.starts_with("--") => {
-                replay.as_mut().map(|r| r.push(PathBuf::from(other)));
+                if let Some(r) = replay.as_mut() {
+                    r.push(PathBuf::from(other));
+                }
             }
             other => return Err(format!("unknown argument \"{other}\"")),
         }

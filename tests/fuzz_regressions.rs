@@ -72,7 +72,10 @@ fn a_sphere_of_radius_1e23_is_an_error_not_a_bvh_panic() {
     );
     // The same through a huge transform, for a disk and a cylinder.
     let e = world_error("Shape \"sphere\"\nScale 1e20 1e20 1e20\nShape \"disk\"");
-    assert_eq!(e, "scene.pbrt:5:1: Shape \"disk\": the geometry reaches 1e20 from the origin; coordinates beyond ±1e12 are not supported");
+    assert_eq!(
+        e,
+        "scene.pbrt:5:1: Shape \"disk\": the geometry reaches 1e20 from the origin; coordinates beyond ±1e12 are not supported"
+    );
     let e = world_error("Shape \"sphere\"\nTranslate 0 0 1e30\nShape \"cylinder\"");
     assert!(e.starts_with("scene.pbrt:5:1: Shape \"cylinder\": the geometry reaches 1e30"), "{e}");
     // Infinity after the transform.
@@ -137,11 +140,9 @@ fn ply_headers_declaring_2_to_the_40_records_fail_without_allocating() {
     };
     let (binary_body, big_body) = (binary(false), binary(true));
     let ascii_body = b"0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n".to_vec();
-    for (format, body) in [
-        ("binary_little_endian", &binary_body),
-        ("binary_big_endian", &big_body),
-        ("ascii", &ascii_body),
-    ] {
+    for (format, body) in
+        [("binary_little_endian", &binary_body), ("binary_big_endian", &big_body), ("ascii", &ascii_body)]
+    {
         for (nv, nf, want) in [
             (huge, 1, format!("the header declares {huge} vertices; at most 4294967295 are supported")),
             (3, huge, format!("of {huge} faces")),
@@ -205,7 +206,9 @@ fn includes_that_double_at_every_level_are_refused_before_memory_runs_out() {
 fn object_instance_recursion_is_an_error() {
     let e = world_error("ObjectBegin \"a\"\nShape \"sphere\"\nObjectInstance \"a\"\nObjectEnd");
     assert_eq!(e, "scene.pbrt:5:1: ObjectInstance inside the definition of \"a\": pbrt-v3 does not nest instances");
-    let e = world_error("ObjectBegin \"b\"\nShape \"sphere\"\nObjectEnd\nObjectBegin \"a\"\nObjectInstance \"b\"\nObjectEnd");
+    let e = world_error(
+        "ObjectBegin \"b\"\nShape \"sphere\"\nObjectEnd\nObjectBegin \"a\"\nObjectInstance \"b\"\nObjectEnd",
+    );
     assert_eq!(e, "scene.pbrt:7:1: ObjectInstance inside the definition of \"a\": pbrt-v3 does not nest instances");
     let e = world_error("ObjectInstance \"never\"");
     assert!(e.starts_with("scene.pbrt:3:1: ObjectInstance: no object named \"never\""), "{e}");

@@ -99,10 +99,7 @@ fn fatal(kind: &str, why: &str) -> ! {
 }
 
 fn on_over_limit(size: usize, total: usize) {
-    fatal(
-        "memory",
-        &format!("an allocation of {size} bytes would bring the heap to {total} bytes, over the limit"),
-    );
+    fatal("memory", &format!("an allocation of {size} bytes would bring the heap to {total} bytes, over the limit"));
 }
 
 /// Starts the watchdog thread (once per process); it reads the timeout from `TIMEOUT_MS`.
@@ -260,7 +257,8 @@ pub fn run(cfg: &Config) -> std::io::Result<Report> {
         let _ = std::fs::remove_dir_all(&scratch);
         return Ok(report);
     }
-    let mut corpus: Vec<Entry> = seeds.iter().enumerate().map(|(i, s)| Entry { data: s.data.clone(), seed: i }).collect();
+    let mut corpus: Vec<Entry> =
+        seeds.iter().enumerate().map(|(i, s)| Entry { data: s.data.clone(), seed: i }).collect();
     let seed_bytes: Vec<&[u8]> = seeds.iter().map(|s| s.data.as_slice()).collect();
     let dict: Vec<&[u8]> = cfg.target.dict().iter().map(|s| s.as_bytes()).collect();
     let mutator = Mutator { others: &seed_bytes, dict: &dict, max_len: cfg.target.max_len() };

@@ -104,10 +104,10 @@ const INTERESTING_INTS: &[u64] = &[
     0xffff_ffff,
     1 << 40,
     u64::MAX,
-    0x7fc0_0000, // f32 NaN
-    0x7f80_0000, // f32 +inf
-    0xff80_0000, // f32 -inf
-    0x7f7f_ffff, // f32 max
+    0x7fc0_0000,           // f32 NaN
+    0x7f80_0000,           // f32 +inf
+    0xff80_0000,           // f32 -inf
+    0x7f7f_ffff,           // f32 max
     0x7ff8_0000_0000_0000, // f64 NaN
     0x7ff0_0000_0000_0000, // f64 inf
 ];

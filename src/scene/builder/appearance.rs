@@ -6,11 +6,11 @@ use std::rc::Rc;
 use crate::error::{Error, Result, SourceLoc};
 use crate::parse::Named;
 use crate::scene::accel::{InstanceXf, check_extent};
-use crate::scene::shapes::quadric::transform_bounds;
 use crate::scene::geometry::ObjectDef;
 use crate::scene::light::{self, Light};
 use crate::scene::material::{Material, MaterialKind};
 use crate::scene::props::{Capture, Prop, Props};
+use crate::scene::shapes::quadric::transform_bounds;
 use crate::scene::texture::{self, Texture, TextureValue};
 
 use super::state::Block;
