@@ -59,7 +59,7 @@ fn world_error(body: &str) -> String {
 /// Fuzz finding (scene target, seed 1, first seconds): the hackmad `subsurface.pbrt` scene with one radius
 /// replaced by 99999999999999999999999. The sphere's bounds are finite in f32, but obvhs's BVH build
 /// multiplies surface areas in f32, they overflow near 1e19, and its CWBVH conversion indexed out of
-/// bounds (panic in obvhs `bvh2_to_cwbvh.rs`). Shapes beyond ±1e12 are now an error at the Shape.
+/// bounds (panic in obvhs `bvh2_to_cwbvh.rs`). Shapes beyond ±1e12 were made an error at the Shape (now ±1e9, see below).
 #[test]
 fn a_sphere_of_radius_1e23_is_an_error_not_a_bvh_panic() {
     let body = "Shape \"sphere\" \"float radius\" 1\nTranslate 3 0 0\nShape \"sphere\" \"float radius\" 1\n\
@@ -68,13 +68,13 @@ fn a_sphere_of_radius_1e23_is_an_error_not_a_bvh_panic() {
     assert_eq!(
         world_error(body),
         "scene.pbrt:7:1: Shape \"sphere\": the geometry reaches 1e23 from the origin; \
-         coordinates beyond ±1e12 are not supported"
+         coordinates beyond ±1e9 are not supported"
     );
     // The same through a huge transform, for a disk and a cylinder.
     let e = world_error("Shape \"sphere\"\nScale 1e20 1e20 1e20\nShape \"disk\"");
     assert_eq!(
         e,
-        "scene.pbrt:5:1: Shape \"disk\": the geometry reaches 1e20 from the origin; coordinates beyond ±1e12 are not supported"
+        "scene.pbrt:5:1: Shape \"disk\": the geometry reaches 1e20 from the origin; coordinates beyond ±1e9 are not supported"
     );
     let e = world_error("Shape \"sphere\"\nTranslate 0 0 1e30\nShape \"cylinder\"");
     assert!(e.starts_with("scene.pbrt:5:1: Shape \"cylinder\": the geometry reaches 1e30"), "{e}");
@@ -83,31 +83,54 @@ fn a_sphere_of_radius_1e23_is_an_error_not_a_bvh_panic() {
     assert!(e.starts_with("scene.pbrt:5:1: Shape \"sphere\": the geometry reaches infinity"), "{e}");
 }
 
-/// The same limit for triangle meshes and for object instances (whose object is fine but whose instance
+/// Fuzz findings (scene target, overflow checks and debug assertions on, seed 300): the veach-mis scene with
+/// a sphere radius replaced by 4294967295, and the Cornell box with one vertex's y replaced by -2147483649.
+/// Both loaded in release builds, but obvhs's debug-only CWBVH validation failed: a node origin outside its
+/// parent, and a quantized box that did not contain its triangle (a ray could miss it). Both thresholds lie
+/// between 1.5e9 and 2^32, so geometry beyond ±1e9 is now an error; up to 1e8 next to unit-sized shapes loads.
+#[test]
+fn coordinates_near_2_to_the_31_are_refused_and_1e8_loads() {
+    let small = "Shape \"sphere\" \"float radius\" 0.5\nTranslate 1 0 0\n\
+                 Shape \"trianglemesh\" \"integer indices\" [0 1 2] \"point P\" [0 0 0 1 0 0 0 1 0]\n";
+    let e = world_error(&format!("{small}Shape \"sphere\" \"float radius\" 4294967295"));
+    assert!(e.starts_with("scene.pbrt:6:1: Shape \"sphere\": the geometry reaches 4.2949673e9"), "{e}");
+    let e = world_error(&format!(
+        "{small}Shape \"trianglemesh\" \"integer indices\" [0 1 2] \"point P\" [0 1.2 0 1 -2147483649 0 0 1.2 1]"
+    ));
+    assert!(e.starts_with("scene.pbrt:6:1: Shape \"trianglemesh\": vertex 1 lies beyond ±1e9"), "{e}");
+    let loaded = load_world(&format!(
+        "{small}Shape \"sphere\" \"float radius\" 1e8\n\
+         Shape \"trianglemesh\" \"integer indices\" [0 1 2] \"point P\" [0 1.2 0 1 -1e8 0 0 1.2 1]"
+    ))
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(loaded.stats.shapes, 4);
+}
+
+/// The same limit (±1e9) for triangle meshes and for object instances (whose object is fine but whose instance
 /// transform takes it out of range).
 #[test]
-fn meshes_and_instances_beyond_1e12_are_errors() {
+fn meshes_and_instances_beyond_1e9_are_errors() {
     let tri = "Shape \"trianglemesh\" \"integer indices\" [0 1 2] \"point P\" [0 0 0 1 0 0 0 1 0]";
     let e = world_error(&format!(
         "{tri}\nShape \"trianglemesh\" \"integer indices\" [0 1 2] \"point P\" [0 0 0 1e20 0 0 0 1 0]"
     ));
     assert_eq!(
         e,
-        "scene.pbrt:4:1: Shape \"trianglemesh\": vertex 1 lies beyond ±1e12 after the transform (too far out for the BVH)"
+        "scene.pbrt:4:1: Shape \"trianglemesh\": vertex 1 lies beyond ±1e9 after the transform (too far out for the BVH)"
     );
     let e = world_error(&format!("ObjectBegin \"o\"\n{tri}\nObjectEnd\n{tri}\nScale 1e20 1 1\nObjectInstance \"o\""));
     assert_eq!(
         e,
         "scene.pbrt:8:1: ObjectInstance \"o\": the geometry reaches 1e20 from the origin; \
-         coordinates beyond ±1e12 are not supported"
+         coordinates beyond ±1e9 are not supported"
     );
     // Objects made of analytic shapes too.
-    let e = world_error("ObjectBegin \"s\"\nShape \"sphere\"\nObjectEnd\nTranslate 2e12 0 0\nObjectInstance \"s\"");
-    assert!(e.starts_with("scene.pbrt:7:1: ObjectInstance \"s\": the geometry reaches 2e12"), "{e}");
+    let e = world_error("ObjectBegin \"s\"\nShape \"sphere\"\nObjectEnd\nTranslate 2e9 0 0\nObjectInstance \"s\"");
+    assert!(e.starts_with("scene.pbrt:7:1: ObjectInstance \"s\": the geometry reaches 2e9"), "{e}");
     // Up to the limit everything loads.
     let ok = load_world(&format!(
-        "{tri}\nShape \"sphere\" \"float radius\" 1e11\nObjectBegin \"o\"\n{tri}\nObjectEnd\n\
-         Scale 1e11 1e11 1e11\nObjectInstance \"o\""
+        "{tri}\nShape \"sphere\" \"float radius\" 1e8\nObjectBegin \"o\"\n{tri}\nObjectEnd\n\
+         Scale 1e8 1e8 1e8\nObjectInstance \"o\""
     ));
     let loaded = ok.unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(loaded.stats.instances, 1);

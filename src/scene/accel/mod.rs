@@ -21,11 +21,13 @@ use crate::scene::shapes::triangle::{self, RayShear};
 mod traverse;
 use traverse::{TravRay, has_avx2, intersect_node};
 
-/// The largest coordinate (in absolute value) that geometry may reach. obvhs's builder works with box
-/// surface areas times primitive counts in f32; near 1e19 they overflow and its CWBVH conversion indexes
-/// out of bounds (a panic found by fuzzing: a sphere of radius 1e23). 1e12 leaves room for 1e13
-/// primitives, and f32 positions that far out have no useful precision anyway.
-pub const MAX_COORD: f32 = 1e12;
+/// The largest coordinate (in absolute value) that geometry may reach. Found by fuzzing: obvhs's BVH
+/// build works with box surface areas times primitive counts in f32, which overflow near 1e19 (its CWBVH
+/// conversion then indexes out of bounds: a panic, for a sphere of radius 1e23); and from about 2^31 on, its
+/// own debug validation finds quantized node boxes that do not contain their primitives (a vertex at
+/// y = -2^31 next to a unit-sized box; a sphere of radius 2^32), i.e. rays could miss them. 1e9 stays
+/// below both, and f32 positions that far out have no useful precision anyway.
+pub const MAX_COORD: f32 = 1e9;
 
 /// Checks that the box `lo..hi` is finite and within ±[`MAX_COORD`]; the message says how far it reaches.
 pub fn check_extent(lo: Vec3A, hi: Vec3A) -> Result<(), String> {
