@@ -28,7 +28,8 @@ pub struct TriangleMesh {
 }
 
 impl TriangleMesh {
-    /// Places `data` with `xf` (object → world). Fails when a transformed vertex leaves f32 range.
+    /// Places `data` with `xf` (object → world). Fails when a transformed vertex leaves f32 range or lies
+    /// beyond ±[`MAX_COORD`] (the BVH cannot handle it).
     pub fn place(data: MeshData, xf: &Transform, reverse_orientation: bool, material: u32) -> Result<Self, String> {
         let affine = xf.to_affine()?;
         let positions: Vec<[f32; 3]> = if xf.is_identity() {
