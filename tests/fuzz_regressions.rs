@@ -1,6 +1,7 @@
-//! Inputs that once crashed, hung or blew up a reader (found by the fuzz harness in `examples/fuzz`, or
-//! named in the fuzzing issue), each asserting the clean error it gives now. Memory is measured with the
-//! harness's counting allocator: no input here may grow the heap by more than [`HEAP_BOUND`].
+//! Inputs that once crashed, hung or blew up a reader (found by the fuzz harness in `examples/fuzz`, by
+//! hand-built inputs while writing it, or named in the fuzzing issue), each asserting the clean error it
+//! gives now. Memory is measured with the harness's counting allocator: no input here may grow the heap by
+//! more than [`HEAP_BOUND`].
 
 #[path = "../examples/fuzz/alloc.rs"]
 #[allow(dead_code)]
@@ -59,7 +60,8 @@ fn world_error(body: &str) -> String {
 /// Fuzz finding (scene target, seed 1, first seconds): the hackmad `subsurface.pbrt` scene with one radius
 /// replaced by 99999999999999999999999. The sphere's bounds are finite in f32, but obvhs's BVH build
 /// multiplies surface areas in f32, they overflow near 1e19, and its CWBVH conversion indexed out of
-/// bounds (panic in obvhs `bvh2_to_cwbvh.rs`). Shapes beyond ±1e12 were made an error at the Shape (now ±1e9, see below).
+/// bounds (panic in obvhs `bvh2_to_cwbvh.rs`). Shapes beyond ±1e12 were made an error at the Shape (now
+/// ±1e9, see below).
 #[test]
 fn a_sphere_of_radius_1e23_is_an_error_not_a_bvh_panic() {
     let body = "Shape \"sphere\" \"float radius\" 1\nTranslate 3 0 0\nShape \"sphere\" \"float radius\" 1\n\
@@ -74,7 +76,8 @@ fn a_sphere_of_radius_1e23_is_an_error_not_a_bvh_panic() {
     let e = world_error("Shape \"sphere\"\nScale 1e20 1e20 1e20\nShape \"disk\"");
     assert_eq!(
         e,
-        "scene.pbrt:5:1: Shape \"disk\": the geometry reaches 1e20 from the origin; coordinates beyond ±1e9 are not supported"
+        "scene.pbrt:5:1: Shape \"disk\": the geometry reaches 1e20 from the origin; \
+         coordinates beyond ±1e9 are not supported"
     );
     let e = world_error("Shape \"sphere\"\nTranslate 0 0 1e30\nShape \"cylinder\"");
     assert!(e.starts_with("scene.pbrt:5:1: Shape \"cylinder\": the geometry reaches 1e30"), "{e}");
@@ -116,7 +119,8 @@ fn meshes_and_instances_beyond_1e9_are_errors() {
     ));
     assert_eq!(
         e,
-        "scene.pbrt:4:1: Shape \"trianglemesh\": vertex 1 lies beyond ±1e9 after the transform (too far out for the BVH)"
+        "scene.pbrt:4:1: Shape \"trianglemesh\": vertex 1 lies beyond ±1e9 after the transform \
+         (too far out for the BVH)"
     );
     let e = world_error(&format!("ObjectBegin \"o\"\n{tri}\nObjectEnd\n{tri}\nScale 1e20 1 1\nObjectInstance \"o\""));
     assert_eq!(
@@ -327,7 +331,8 @@ fn scanline_exr(w: i32, h: i32, all_blocks: bool) -> Vec<u8> {
     out
 }
 
-/// Found while fuzzing the image reader: a 330 KB EXR whose header declares 16384×16384 float RGB pixels
+/// Found with a hand-built input while writing the fuzz harness (the fuzzer itself did not reach it): a
+/// 330 KB EXR whose header declares 16384×16384 float RGB pixels
 /// but holds one scanline block. The exr crate fills the missing blocks in, so it "read" fine after
 /// 10 s and 6 GB of memory. A layer may now hold at most 1100 times the file size (deflate's best is
 /// 1032:1).

@@ -279,7 +279,8 @@ pub fn run(cfg: &Config) -> std::io::Result<Report> {
         if cfg.progress_every > 0.0 && secs >= next_progress {
             next_progress += cfg.progress_every;
             eprintln!(
-                "[{secs:7.0} s] {}: {} inputs ({:.0}/s), corpus {}, kinds {}, panics {}, max heap growth {:.1} MiB, slowest {:.0} ms",
+                "[{secs:7.0} s] {}: {} inputs ({:.0}/s), corpus {}, kinds {}, panics {}, \
+                 max heap growth {:.1} MiB, slowest {:.0} ms",
                 cfg.target.name(),
                 report.inputs,
                 report.inputs as f64 / secs,
