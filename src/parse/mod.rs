@@ -23,10 +23,26 @@ use crate::error::{Error, Result, SourceLoc};
 /// Includes deeper than this are refused (a chain of distinct files this long is surely a mistake).
 const MAX_INCLUDE_DEPTH: usize = 100;
 
-/// The files being parsed, outermost first: canonical path (for cycle checks) and the path as shown.
+/// Included text may add up to this many times the size of the distinct files read, plus
+/// [`INCLUDE_SLACK`]. Files that include another one twice, over a few levels, multiply the text
+/// exponentially without a cycle or a deep chain (30 levels: 2^30 copies); this stops them before the
+/// directives fill the memory, while a scene that includes each file once or a few times never gets near.
+const MAX_INCLUDE_AMPLIFICATION: u64 = 64;
+
+/// Included text allowed beyond the amplification rule (small files included many times are fine).
+const INCLUDE_SLACK: u64 = 16 << 20;
+
+/// Each inclusion counts as at least this many bytes (reading a file has a cost of its own).
+const MIN_INCLUDE_COST: u64 = 256;
+
+/// The files being parsed, outermost first: canonical path (for cycle checks) and the path as shown;
+/// and how much text has been read, counting each distinct file once and every inclusion.
 #[derive(Debug, Default)]
 pub(crate) struct IncludeStack {
     files: Vec<(PathBuf, Arc<Path>)>,
+    seen: std::collections::HashSet<PathBuf>,
+    distinct_bytes: u64,
+    total_bytes: u64,
 }
 
 /// Reads and parses the scene file at `path`, inlining every `Include`.
@@ -44,7 +60,11 @@ pub fn parse_str(text: &str, name: &Path) -> Result<Vec<Directive>> {
 
 fn parse_top(text: &str, file: Arc<Path>) -> Result<Vec<Directive>> {
     let mut stack = IncludeStack::default();
-    stack.files.push((canonical(&file), file.clone()));
+    let key = canonical(&file);
+    stack.seen.insert(key.clone());
+    stack.distinct_bytes = text.len() as u64;
+    stack.total_bytes = text.len() as u64;
+    stack.files.push((key, file.clone()));
     let mut out = Vec::new();
     parser::parse_text(text, file, &mut stack, &mut out)?;
     Ok(out)
@@ -85,6 +105,22 @@ pub(crate) fn include(
     }
     if stack.files.len() >= MAX_INCLUDE_DEPTH {
         return Err(Error::at(at, format!("Include nested more than {MAX_INCLUDE_DEPTH} files deep")));
+    }
+    let size = bytes.len() as u64;
+    if stack.seen.insert(key.clone()) {
+        stack.distinct_bytes += size;
+    }
+    stack.total_bytes += size.max(MIN_INCLUDE_COST);
+    if stack.total_bytes > MAX_INCLUDE_AMPLIFICATION * stack.distinct_bytes + INCLUDE_SLACK {
+        return Err(Error::at(
+            at,
+            format!(
+                "Include \"{name}\": the included files add up to {} bytes of scene text, more than \
+                 {MAX_INCLUDE_AMPLIFICATION} times the {} bytes of the distinct files (files that include \
+                 each other several times over multiply the scene)",
+                stack.total_bytes, stack.distinct_bytes
+            ),
+        ));
     }
     let text = decode(bytes, &shown)?;
     stack.files.push((key, shown.clone()));
@@ -192,6 +228,24 @@ mod tests {
         let main = dir.write("main.pbrt", "Include \"bad.pbrt\"");
         let e = parse_file(&main).unwrap_err().to_string();
         assert_eq!(e, format!("{}:2:2: file is not valid UTF-8 text", bad.display()));
+    }
+
+    #[test]
+    fn includes_that_multiply_the_text_are_refused() {
+        let dir = TempDir::new("fanout");
+        // Each level includes the next one twice: 2^40 copies of the last file without a cycle.
+        for k in 0..40 {
+            dir.write(&format!("l{k}.pbrt"), format!("Include \"l{n}.pbrt\"\nInclude \"l{n}.pbrt\"\n", n = k + 1));
+        }
+        dir.write("l40.pbrt", format!("Shape \"sphere\" # {}\n", "x".repeat(4000)));
+        let top = dir.write("top.pbrt", "Include \"l0.pbrt\"\n");
+        let e = parse_file(&top).unwrap_err().to_string();
+        assert!(e.contains("the included files add up to"), "{e}");
+        assert!(e.contains("more than 64 times the"), "{e}");
+        // A small file included many times (below the slack) is fine.
+        dir.write("small.pbrt", "Shape \"sphere\"\n");
+        let many = dir.write("many.pbrt", "Include \"small.pbrt\"\n".repeat(2000));
+        assert_eq!(parse_file(&many).unwrap().len(), 2000);
     }
 
     /// Includes that point outside the shared scene folder, at files its snapshot does not have.

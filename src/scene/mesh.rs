@@ -3,6 +3,7 @@
 
 use crate::error::{Error, Result, SourceLoc, Warnings};
 use crate::parse::ParamList;
+use crate::scene::accel::MAX_COORD;
 use crate::scene::shapes::mesh_data::MeshData;
 use crate::scene::shapes::quadric::transform_normal;
 use crate::scene::transform::Transform;
@@ -27,7 +28,8 @@ pub struct TriangleMesh {
 }
 
 impl TriangleMesh {
-    /// Places `data` with `xf` (object → world). Fails when a transformed vertex leaves f32 range.
+    /// Places `data` with `xf` (object → world). Fails when a transformed vertex leaves f32 range or lies
+    /// beyond ±[`MAX_COORD`] (the BVH cannot handle it).
     pub fn place(data: MeshData, xf: &Transform, reverse_orientation: bool, material: u32) -> Result<Self, String> {
         let affine = xf.to_affine()?;
         let positions: Vec<[f32; 3]> = if xf.is_identity() {
@@ -37,6 +39,10 @@ impl TriangleMesh {
         };
         if let Some(i) = positions.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
             return Err(format!("vertex {i} is not finite after the transform"));
+        }
+        if let Some(i) = positions.iter().position(|p| !p.iter().all(|x| x.abs() <= MAX_COORD)) {
+            let max = MAX_COORD;
+            return Err(format!("vertex {i} lies beyond ±{max:e} after the transform (too far out for the BVH)"));
         }
         let normals = if xf.is_identity() {
             data.normals

@@ -22,6 +22,24 @@ use crate::scene::shapes::triangle::{self, RayShear};
 mod traverse;
 use traverse::{TravRay, has_avx2, intersect_node};
 
+/// The largest coordinate (in absolute value) that geometry may reach. Found by fuzzing: obvhs's BVH
+/// build works with box surface areas times primitive counts in f32, which overflow near 1e19 (its CWBVH
+/// conversion then indexes out of bounds: a panic, for a sphere of radius 1e23); and from about 2^31 on, its
+/// own debug validation finds quantized node boxes that do not contain their primitives (a vertex at
+/// y = -2^31 next to a unit-sized box; a sphere of radius 2^32), i.e. rays could miss them. 1e9 stays
+/// below both, and f32 positions that far out have no useful precision anyway.
+pub const MAX_COORD: f32 = 1e9;
+
+/// Checks that the box `lo..hi` is finite and within ±[`MAX_COORD`]; the message says how far it reaches.
+pub fn check_extent(lo: Vec3A, hi: Vec3A) -> Result<(), String> {
+    let reach = lo.abs().max(hi.abs()).max_element();
+    if lo.is_finite() && hi.is_finite() && reach <= MAX_COORD {
+        return Ok(());
+    }
+    let reach = if lo.is_finite() && hi.is_finite() { format!("{reach:e}") } else { "infinity".into() };
+    Err(format!("the geometry reaches {reach} from the origin; coordinates beyond ±{MAX_COORD:e} are not supported"))
+}
+
 /// What a BVH leaf entry is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PrimRef {
@@ -171,7 +189,9 @@ impl Level {
         let kept: Vec<(usize, (Vec3A, Vec3A))> = boxes
             .iter()
             .enumerate()
-            .filter_map(|(i, b)| b.filter(|(lo, hi)| lo.is_finite() && hi.is_finite()).map(|b| (i, b)))
+            // The scene builder refuses shapes outside ±MAX_COORD with an error; this keeps the BVH build
+            // safe for any other caller.
+            .filter_map(|(i, b)| b.filter(|(lo, hi)| check_extent(*lo, *hi).is_ok()).map(|b| (i, b)))
             .collect();
         if kept.is_empty() {
             return Level::default();

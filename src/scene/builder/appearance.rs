@@ -5,11 +5,12 @@ use std::rc::Rc;
 
 use crate::error::{Error, Result, SourceLoc};
 use crate::parse::Named;
-use crate::scene::accel::InstanceXf;
+use crate::scene::accel::{InstanceXf, check_extent};
 use crate::scene::geometry::ObjectDef;
 use crate::scene::light::{self, Light};
 use crate::scene::material::{Material, MaterialKind};
 use crate::scene::props::{Capture, Prop, Props};
+use crate::scene::shapes::quadric::transform_bounds;
 use crate::scene::texture::{self, Texture, TextureValue};
 
 use super::state::Block;
@@ -204,6 +205,7 @@ impl SceneBuilder {
             def: ObjectDef { name, meshes: Vec::new() },
             prims: Vec::new(),
             loc: loc.clone(),
+            bounds: None,
         });
         self.current_object = Some(id);
         Ok(())
@@ -214,7 +216,11 @@ impl SceneBuilder {
             return Err(Error::at(loc, "ObjectEnd without a matching ObjectBegin"));
         }
         self.pop(Block::Object, loc)?;
-        self.current_object = None;
+        if let Some(o) = self.current_object.take() {
+            let rec = &self.objects[o as usize];
+            let bounds = super::prim_bounds(&rec.prims, &self.quadrics);
+            self.objects[o as usize].bounds = bounds;
+        }
         Ok(())
     }
 
@@ -241,6 +247,10 @@ impl SceneBuilder {
             self.ctm[0].inverse().to_affine().map_err(|e| Error::at(loc, format!("ObjectInstance: {e}")))?;
         if self.objects[object as usize].prims.is_empty() {
             return Ok(());
+        }
+        if let Some((lo, hi)) = self.objects[object as usize].bounds {
+            let (lo, hi) = transform_bounds(&world_from_object, lo, hi);
+            check_extent(lo, hi).map_err(|e| Error::at(loc, format!("ObjectInstance \"{name}\": {e}")))?;
         }
         let id = self.instances.len() as u32;
         self.instances.push(InstanceXf { object, world_from_object, object_from_world });

@@ -17,6 +17,8 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use glam::Vec3A;
+
 use crate::error::{Error, Result, SourceLoc, Warnings};
 use crate::parse::{Directive, DirectiveKind, Named, ParamList};
 use crate::scene::accel::{Accel, BuildPrim, PrimRef};
@@ -48,6 +50,21 @@ struct ObjectRecord {
     def: ObjectDef,
     prims: Vec<BuildPrim>,
     loc: SourceLoc,
+    /// Object-space bounds of `prims`, set at ObjectEnd (`None` while recording, or when empty).
+    bounds: Option<(Vec3A, Vec3A)>,
+}
+
+/// The bounds of triangle and analytic-shape primitives (instances have none here).
+fn prim_bounds(prims: &[BuildPrim], quadrics: &[Quadric]) -> Option<(Vec3A, Vec3A)> {
+    let boxes = prims.iter().filter_map(|p| match p.r {
+        PrimRef::Triangle { .. } => {
+            let [a, b, c] = p.verts.map(Vec3A::from);
+            Some((a.min(b).min(c), a.max(b).max(c)))
+        }
+        PrimRef::Quadric(q) => quadrics.get(q as usize).map(Quadric::world_bounds),
+        PrimRef::Instance(_) => None,
+    });
+    boxes.reduce(|(lo, hi), (a, b)| (lo.min(a), hi.max(b)))
 }
 
 /// Builds a [`Scene`] from directives.

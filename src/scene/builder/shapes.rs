@@ -7,6 +7,7 @@ use std::rc::Rc;
 
 use crate::error::{Error, Result, SourceLoc};
 use crate::parse::{Named, TexOr};
+use crate::scene::accel::check_extent;
 use crate::scene::geometry::{ShapeId, ShapeInfo};
 use crate::scene::light::AreaLight;
 use crate::scene::mesh::{TriangleMesh, trianglemesh_params};
@@ -91,6 +92,8 @@ impl SceneBuilder {
                     object_from_world,
                     flip_normal: reverse ^ xf.swaps_handedness(),
                 };
+                let (lo, hi) = q.world_bounds();
+                check_extent(lo, hi).map_err(|e| Error::at(loc, format!("Shape \"{}\": {e}", n.name)))?;
                 let id = self.add_quadric(q, ShapeInfo { material, area_light: None });
                 self.current_object.is_none().then_some(ShapeId::Quadric(id))
             }
