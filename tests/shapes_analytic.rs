@@ -77,6 +77,12 @@ fn curve_pieces_segments_and_split_depth_limits() {
 #[test]
 fn invalid_curves_and_quadrics_are_refused_where_they_are_written() {
     refused(r#"Shape "curve" "integer splitdepth" -1 "point P" [0 0 0 1 0 0 2 0 0 3 0 0]"#, "splitdepth");
+    // Beyond the BVH's coordinate range, like every other shape (and inside an object definition too).
+    refused(r#"Shape "curve" "point P" [0 0 0 1 0 0 2 0 0 3e10 0 0]"#, "coordinates beyond");
+    refused(
+        r#"ObjectBegin "o" Shape "curve" "float width" 1e10 "point P" [0 0 0 1 0 0 2 0 0 3 0 0] ObjectEnd"#,
+        "beyond",
+    );
     refused(r#"Shape "curve" "point P" [0 0 0 1 0 0 2 0 0 3 0 0 4 0 0]"#, "control points");
     refused(r#"Shape "curve" "integer degree" 4 "point P" [0 0 0 1 0 0 2 0 0 3 0 0 4 0 0]"#, "degree");
     refused(r#"Shape "curve" "string basis" "catmullrom" "point P" [0 0 0 1 0 0 2 0 0 3 0 0]"#, "basis");

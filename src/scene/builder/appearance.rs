@@ -218,7 +218,7 @@ impl SceneBuilder {
         self.pop(Block::Object, loc)?;
         if let Some(o) = self.current_object.take() {
             let rec = &self.objects[o as usize];
-            let bounds = super::prim_bounds(&rec.prims, &self.quadrics);
+            let bounds = super::prim_bounds(&rec.prims, &self.quadrics, &self.curves, &self.curve_segments);
             self.objects[o as usize].bounds = bounds;
         }
         Ok(())

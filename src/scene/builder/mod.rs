@@ -54,14 +54,23 @@ struct ObjectRecord {
     bounds: Option<(Vec3A, Vec3A)>,
 }
 
-/// The bounds of triangle and analytic-shape primitives (instances have none here).
-fn prim_bounds(prims: &[BuildPrim], quadrics: &[Quadric]) -> Option<(Vec3A, Vec3A)> {
+/// The bounds of triangle, analytic-shape and curve primitives (instances have none here).
+fn prim_bounds(
+    prims: &[BuildPrim],
+    quadrics: &[Quadric],
+    curves: &[Curve],
+    segments: &[CurveSegment],
+) -> Option<(Vec3A, Vec3A)> {
     let boxes = prims.iter().filter_map(|p| match p.r {
         PrimRef::Triangle { .. } => {
             let [a, b, c] = p.verts.map(Vec3A::from);
             Some((a.min(b).min(c), a.max(b).max(c)))
         }
         PrimRef::Quadric(q) => quadrics.get(q as usize).map(Quadric::world_bounds),
+        PrimRef::Curve(s) => {
+            let seg = segments.get(s as usize)?;
+            curves.get(seg.curve as usize).map(|c| c.world_bounds(seg))
+        }
         PrimRef::Instance(_) => None,
     });
     boxes.reduce(|(lo, hi), (a, b)| (lo.min(a), hi.max(b)))
@@ -380,10 +389,17 @@ impl SceneBuilder {
 
     /// Adds a curve piece, split into 2^`split_depth` segment primitives, to the world or to the object
     /// being defined.
-    fn add_curve(&mut self, curve: Curve, split_depth: u32, info: ShapeInfo) {
+    /// Adds a curve's segments to the world or to the object being defined; refuses a curve reaching beyond
+    /// ±[`crate::scene::accel::MAX_COORD`] (before anything is added).
+    fn add_curve(&mut self, curve: Curve, split_depth: u32, info: ShapeInfo) -> std::result::Result<(), String> {
         let id = self.curves.len() as u32;
+        let segments: Vec<CurveSegment> = curve.segments(id, split_depth).collect();
+        for seg in &segments {
+            let (lo, hi) = curve.world_bounds(seg);
+            crate::scene::accel::check_extent(lo, hi)?;
+        }
         let first = self.curve_segments.len() as u32;
-        self.curve_segments.extend(curve.segments(id, split_depth));
+        self.curve_segments.extend(segments);
         let last = self.curve_segments.len() as u32;
         self.curves.push(curve);
         self.curve_info.push(info);
@@ -392,6 +408,7 @@ impl SceneBuilder {
             Some(o) => self.objects[o as usize].prims.extend(prims),
             None => self.top.extend(prims),
         }
+        Ok(())
     }
 }
 

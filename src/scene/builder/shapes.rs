@@ -107,7 +107,8 @@ impl SceneBuilder {
                 for piece in spec.pieces {
                     let curve = Curve::new(piece.cp, piece.width, spec.kind, piece.normals, placement, flip)
                         .ok_or_else(|| Error::at(loc, "curve: a normal \"N\" is zero"))?;
-                    self.add_curve(curve, spec.split_depth, ShapeInfo { material, area_light: None });
+                    self.add_curve(curve, spec.split_depth, ShapeInfo { material, area_light: None })
+                        .map_err(|e| Error::at(loc, format!("Shape \"curve\": {e}")))?;
                 }
                 if self.gs.area_light.is_some() {
                     self.warnings.at(loc, "area lights on curves are not supported (pbrt-v3 cannot sample curves); the curve does not emit");
