@@ -169,7 +169,7 @@ pub fn run(args: &BenchArgs) -> Result<String> {
     if !args.scenes.is_dir() {
         return Err(Error::usage(format!("{}: no such folder (pass --scenes)", args.scenes.display())));
     }
-    if args.nsamples.iter().any(|&n| n == 0) {
+    if args.nsamples.contains(&0) {
         return Err(Error::usage("--nsamples: ray counts must be at least 1"));
     }
     // pbrt-v3 runs in each scene's folder, so a relative path must be made absolute first.

@@ -98,17 +98,15 @@ pub fn render(
         }
         sampler.spp = spp;
     }
-    if let Some(n) = integrator.filter(|n| n.name != name) {
-        if !n.params.is_empty() {
-            warnings.at(
-                &n.name_loc,
-                format!(
-                    "Integrator \"{}\" is replaced by --integrator {name}; its parameters ({}) are not used",
-                    n.name,
-                    n.params.iter().map(|p| p.name.as_str()).collect::<Vec<_>>().join(", ")
-                ),
-            );
-        }
+    if let Some(n) = integrator.filter(|n| n.name != name && !n.params.is_empty()) {
+        warnings.at(
+            &n.name_loc,
+            format!(
+                "Integrator \"{}\" is replaced by --integrator {name}; its parameters ({}) are not used",
+                n.name,
+                n.params.iter().map(|p| p.name.as_str()).collect::<Vec<_>>().join(", ")
+            ),
+        );
     }
     if name == "cacheao" {
         let set = cache_sample_settings(scene, params, settings, warnings);
@@ -203,13 +201,12 @@ fn cache_sample_settings(
         warnings
             .at(loc, format!("Sampler \"{}\" is not used by cache-based integrators: {per_pixel}", scene.sampler.name));
     }
-    if let Some(loc) = &scene.declared.filter {
-        if scene.filter.kind != filter::FilterKind::Box || scene.filter.radius != [0.5, 0.5] {
-            warnings.at(
-                loc,
-                "PixelFilter is not used by cache-based integrators: the sub-pixel samples of a pixel are averaged (a box filter of radius 0.5)",
-            );
-        }
+    let box_filter = scene.filter.kind == filter::FilterKind::Box && scene.filter.radius == [0.5, 0.5];
+    if let Some(loc) = scene.declared.filter.as_ref().filter(|_| !box_filter) {
+        warnings.at(
+            loc,
+            "PixelFilter is not used by cache-based integrators: the sub-pixel samples of a pixel are averaged (a box filter of radius 0.5)",
+        );
     }
     if scene.film.scale != 1.0 {
         warnings.general(format!("Film \"scale\" {} is not applied by cache-based integrators", scene.film.scale));
