@@ -31,10 +31,12 @@ pub fn run(args: &InfoArgs) -> Result<String> {
     let instanced: usize = instance_triangles(s);
     let _ = writeln!(
         o,
-        "shapes      {} ({} meshes, {} analytic)",
+        "shapes      {} ({} world meshes, {} analytic, {} curves in {} segments)",
         st.shapes,
         s.geometry.meshes.len(),
-        s.geometry.accel.quadrics.len()
+        s.geometry.accel.quadrics.len(),
+        s.geometry.accel.curves.len(),
+        s.geometry.accel.curve_segments.len()
     );
     if !st.shape_types.is_empty() {
         let per_type: Vec<String> = st.shape_types.iter().map(|(t, n)| format!("{t} {n}")).collect();
