@@ -131,44 +131,19 @@ impl Geometry {
                     p: hit.quadric_p,
                     p_error: hit.quadric_err,
                 });
-                let info = self.quadric_info[q as usize];
-                SurfaceInteraction {
-                    p: s.p,
-                    p_error: s.p_error,
-                    t: hit.t,
-                    ng: s.n,
-                    ns: s.n,
-                    dpdu: s.dpdu,
-                    uv: s.uv,
-                    material: info.material,
-                    area_light: info.area_light,
-                    origin: PrimOrigin { prim: hit.prim, instance: hit.instance },
-                }
+                analytic_interaction(hit, [s.p, s.p_error, s.n, s.dpdu], s.uv, self.quadric_info[q as usize])
             }
             PrimRef::Curve(c) => {
                 let seg = &self.accel.curve_segments[c as usize];
                 // The curve's normal depends on the ray, seen in the space the curve was placed in.
                 let local = match hit.instance {
-                    Some(i) => {
-                        let m = &self.accel.instance(i).object_from_world;
-                        Ray { o: m.transform_point3a(ray.o), d: m.transform_vector3a(ray.d), t_max: ray.t_max }
-                    }
+                    Some(i) => self.accel.instance(i).local_ray(ray, ray.t_max),
                     None => *ray,
                 };
                 let [u, v] = hit.b;
                 let s = self.accel.curves[seg.curve as usize].surface(&local, &CurveHit { t: hit.t, u, v });
-                SurfaceInteraction {
-                    p: s.p,
-                    p_error: s.p_error,
-                    t: hit.t,
-                    ng: s.n,
-                    ns: s.n,
-                    dpdu: s.dpdu,
-                    uv: s.uv,
-                    material: self.curve_info[seg.curve as usize].material,
-                    area_light: None,
-                    origin: PrimOrigin { prim: hit.prim, instance: hit.instance },
-                }
+                let info = ShapeInfo { area_light: None, ..self.curve_info[seg.curve as usize] };
+                analytic_interaction(hit, [s.p, s.p_error, s.n, s.dpdu], s.uv, info)
             }
             PrimRef::Instance(_) => unreachable!("instances are resolved by the accelerator"),
         };
@@ -186,6 +161,28 @@ impl Geometry {
         si.origin = PrimOrigin { prim: hit.prim, instance: hit.instance };
         debug_assert!(ray.d.is_finite());
         si
+    }
+}
+
+/// The interaction at a hit on an analytic shape or a curve, from its position, error bound, normal (also
+/// the shading normal) and ∂p/∂u (`[p, p_error, n, dpdu]`), its uv, and its material and emission.
+fn analytic_interaction(
+    hit: &Hit,
+    [p, p_error, n, dpdu]: [Vec3A; 4],
+    uv: [f32; 2],
+    info: ShapeInfo,
+) -> SurfaceInteraction {
+    SurfaceInteraction {
+        p,
+        p_error,
+        t: hit.t,
+        ng: n,
+        ns: n,
+        dpdu,
+        uv,
+        material: info.material,
+        area_light: info.area_light,
+        origin: PrimOrigin { prim: hit.prim, instance: hit.instance },
     }
 }
 

@@ -4,7 +4,7 @@
 use crate::error::{Error, Result, SourceLoc, Warnings};
 use crate::parse::ParamList;
 use crate::scene::accel::MAX_COORD;
-use crate::scene::shapes::mesh_data::MeshData;
+use crate::scene::shapes::mesh_data::{MeshData, triangle_indices};
 use crate::scene::shapes::quadric::transform_normal;
 use crate::scene::transform::Transform;
 
@@ -82,27 +82,7 @@ pub fn trianglemesh_params(params: &ParamList, loc: &SourceLoc, warnings: &mut W
     };
     let nv = p.len();
     let indices: Vec<u32> = match params.ints("indices")? {
-        Some(ix) => {
-            if ix.len() % 3 != 0 {
-                return Err(Error::at(
-                    &at("indices"),
-                    format!("parameter \"indices\": {} values is not a multiple of 3", ix.len()),
-                ));
-            }
-            let mut out = Vec::with_capacity(ix.len());
-            for (k, &v) in ix.iter().enumerate() {
-                if v < 0.0 || v >= nv as f64 {
-                    return Err(Error::at(
-                        &at("indices"),
-                        format!(
-                            "parameter \"indices\": value {v} at position {k} is out of range: there are {nv} vertices"
-                        ),
-                    ));
-                }
-                out.push(v as u32);
-            }
-            out
-        }
+        Some(ix) => triangle_indices(ix, nv, &at("indices"), "")?,
         None if nv == 3 => vec![0, 1, 2],
         None => return Err(Error::at(loc, "trianglemesh: missing required parameter \"integer indices\"")),
     };

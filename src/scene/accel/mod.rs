@@ -81,7 +81,7 @@ pub struct InstanceXf {
 impl InstanceXf {
     /// `ray` in instance space, with `t_max` as the ray length (the transform is affine: parameters carry
     /// over unchanged).
-    fn local_ray(&self, ray: &Ray, t_max: f32) -> Ray {
+    pub fn local_ray(&self, ray: &Ray, t_max: f32) -> Ray {
         Ray {
             o: self.object_from_world.transform_point3a(ray.o),
             d: self.object_from_world.transform_vector3a(ray.d),
@@ -176,14 +176,10 @@ impl Level {
                     if (b - a).cross(c - a) == Vec3A::ZERO {
                         return None;
                     }
-                    Some((a.min(b).min(c), a.max(b).max(c)))
-                }
-                PrimRef::Quadric(q) => Some(shapes.quadrics[q as usize].world_bounds()),
-                PrimRef::Curve(c) => {
-                    let seg = &shapes.curve_segments[c as usize];
-                    Some(shapes.curves[seg.curve as usize].world_bounds(seg))
+                    shapes.bounds(p)
                 }
                 PrimRef::Instance(i) => instance_box(i),
+                _ => shapes.bounds(p),
             })
             .collect();
         let kept: Vec<(usize, (Vec3A, Vec3A))> = boxes
@@ -225,11 +221,34 @@ impl Level {
     }
 }
 
-/// The analytic shapes and curves a level's primitives refer to.
-struct Shapes<'a> {
-    quadrics: &'a [Quadric],
-    curves: &'a [Curve],
-    curve_segments: &'a [CurveSegment],
+/// The analytic shapes and curves that [`BuildPrim`]s refer to.
+#[derive(Clone, Copy, Debug)]
+pub struct Shapes<'a> {
+    /// Analytic shapes, indexed by [`PrimRef::Quadric`].
+    pub quadrics: &'a [Quadric],
+    /// Curve pieces, indexed by [`CurveSegment::curve`].
+    pub curves: &'a [Curve],
+    /// Curve segments, indexed by [`PrimRef::Curve`].
+    pub curve_segments: &'a [CurveSegment],
+}
+
+impl Shapes<'_> {
+    /// The box of a triangle, analytic shape or curve segment in the space it was given in (`None` for an
+    /// instance, whose box depends on its object's BVH, or for an index out of range).
+    pub fn bounds(&self, p: &BuildPrim) -> Option<(Vec3A, Vec3A)> {
+        match p.r {
+            PrimRef::Triangle { .. } => {
+                let [a, b, c] = p.verts.map(Vec3A::from);
+                Some((a.min(b).min(c), a.max(b).max(c)))
+            }
+            PrimRef::Quadric(q) => self.quadrics.get(q as usize).map(Quadric::world_bounds),
+            PrimRef::Curve(c) => {
+                let seg = self.curve_segments.get(c as usize)?;
+                self.curves.get(seg.curve as usize).map(|curve| curve.world_bounds(seg))
+            }
+            PrimRef::Instance(_) => None,
+        }
+    }
 }
 
 /// The two-level acceleration structure of a scene.
@@ -248,19 +267,9 @@ pub struct Accel {
 
 impl Accel {
     /// Builds one BVH per object definition (in parallel; each build is deterministic) and the top BVH
-    /// over `top` (world triangles, analytic shapes and instances).
+    /// over `top` (world triangles, analytic shapes, curve segments and instances). `curve_segments` are the
+    /// primitives [`PrimRef::Curve`] refers to, each of a curve in `curves`.
     pub fn build(
-        top: Vec<BuildPrim>,
-        objects: Vec<Vec<BuildPrim>>,
-        instances: Vec<InstanceXf>,
-        quadrics: Vec<Quadric>,
-    ) -> Accel {
-        Self::build_with_curves(top, objects, instances, quadrics, Vec::new(), Vec::new())
-    }
-
-    /// [`Accel::build`] for scenes with curves: `curve_segments` are the primitives
-    /// [`PrimRef::Curve`] refers to, each of a curve in `curves`.
-    pub fn build_with_curves(
         top: Vec<BuildPrim>,
         objects: Vec<Vec<BuildPrim>>,
         instances: Vec<InstanceXf>,
@@ -501,7 +510,7 @@ mod tests {
         };
         let m = Affine3A::from_translation(glam::Vec3::new(-3.0, 0.0, 0.0));
         let inst = InstanceXf { object: 0, world_from_object: m, object_from_world: m.inverse() };
-        let a = Accel::build(top, vec![quad(2.0, 0)], vec![inst], vec![sphere]);
+        let a = Accel::build(top, vec![quad(2.0, 0)], vec![inst], vec![sphere], vec![], vec![]);
         let h = a.intersect(&Ray::new(Vec3A::ZERO, Vec3A::Z)).unwrap();
         assert_eq!((h.t, h.prim, h.instance), (3.0, h.prim, None));
         assert!(matches!(h.prim, PrimRef::Triangle { mesh: 1, .. }));
@@ -517,7 +526,7 @@ mod tests {
 
     #[test]
     fn empty_scenes_hit_nothing() {
-        let a = Accel::build(vec![], vec![], vec![], vec![]);
+        let a = Accel::build(vec![], vec![], vec![], vec![], vec![], vec![]);
         assert!(a.intersect(&Ray::new(Vec3A::ZERO, Vec3A::Z)).is_none());
         assert!(!a.occluded(&Ray::new(Vec3A::ZERO, Vec3A::Z)));
         assert!(a.bounds().is_none());

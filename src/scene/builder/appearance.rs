@@ -5,7 +5,7 @@ use std::rc::Rc;
 
 use crate::error::{Error, Result, SourceLoc};
 use crate::parse::Named;
-use crate::scene::accel::{InstanceXf, check_extent};
+use crate::scene::accel::{InstanceXf, Shapes, check_extent};
 use crate::scene::geometry::ObjectDef;
 use crate::scene::light::{self, Light};
 use crate::scene::material::{Material, MaterialKind};
@@ -218,7 +218,10 @@ impl SceneBuilder {
         self.pop(Block::Object, loc)?;
         if let Some(o) = self.current_object.take() {
             let rec = &self.objects[o as usize];
-            let bounds = super::prim_bounds(&rec.prims, &self.quadrics, &self.curves, &self.curve_segments);
+            let shapes =
+                Shapes { quadrics: &self.quadrics, curves: &self.curves, curve_segments: &self.curve_segments };
+            let bounds =
+                rec.prims.iter().filter_map(|p| shapes.bounds(p)).reduce(|(lo, hi), (a, b)| (lo.min(a), hi.max(b)));
             self.objects[o as usize].bounds = bounds;
         }
         Ok(())

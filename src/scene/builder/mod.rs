@@ -54,28 +54,6 @@ struct ObjectRecord {
     bounds: Option<(Vec3A, Vec3A)>,
 }
 
-/// The bounds of triangle, analytic-shape and curve primitives (instances have none here).
-fn prim_bounds(
-    prims: &[BuildPrim],
-    quadrics: &[Quadric],
-    curves: &[Curve],
-    segments: &[CurveSegment],
-) -> Option<(Vec3A, Vec3A)> {
-    let boxes = prims.iter().filter_map(|p| match p.r {
-        PrimRef::Triangle { .. } => {
-            let [a, b, c] = p.verts.map(Vec3A::from);
-            Some((a.min(b).min(c), a.max(b).max(c)))
-        }
-        PrimRef::Quadric(q) => quadrics.get(q as usize).map(Quadric::world_bounds),
-        PrimRef::Curve(s) => {
-            let seg = segments.get(s as usize)?;
-            curves.get(seg.curve as usize).map(|c| c.world_bounds(seg))
-        }
-        PrimRef::Instance(_) => None,
-    });
-    boxes.reduce(|(lo, hi), (a, b)| (lo.min(a), hi.max(b)))
-}
-
 /// Builds a [`Scene`] from directives.
 pub(crate) struct SceneBuilder {
     opts: LoadOptions,
@@ -311,7 +289,7 @@ impl SceneBuilder {
         let objects: Vec<ObjectRecord> = std::mem::take(&mut self.objects);
         let (defs, object_prims): (Vec<ObjectDef>, Vec<Vec<BuildPrim>>) =
             objects.into_iter().map(|o| (o.def, o.prims)).unzip();
-        let accel = Accel::build_with_curves(
+        let accel = Accel::build(
             std::mem::take(&mut self.top),
             object_prims,
             std::mem::take(&mut self.instances),
@@ -388,9 +366,7 @@ impl SceneBuilder {
     }
 
     /// Adds a curve piece, split into 2^`split_depth` segment primitives, to the world or to the object
-    /// being defined.
-    /// Adds a curve's segments to the world or to the object being defined; refuses a curve reaching beyond
-    /// ±[`crate::scene::accel::MAX_COORD`] (before anything is added).
+    /// being defined; refuses a piece reaching beyond ±[`crate::scene::accel::MAX_COORD`] (before anything is added).
     fn add_curve(&mut self, curve: Curve, split_depth: u32, info: ShapeInfo) -> std::result::Result<(), String> {
         let id = self.curves.len() as u32;
         let segments: Vec<CurveSegment> = curve.segments(id, split_depth).collect();

@@ -5,6 +5,8 @@
 use std::f64::consts::TAU;
 use std::rc::Rc;
 
+use glam::Affine3A;
+
 use crate::error::{Error, Result, SourceLoc};
 use crate::parse::{Named, TexOr};
 use crate::scene::accel::check_extent;
@@ -19,6 +21,7 @@ use crate::scene::shapes::mesh_data::MeshData;
 use crate::scene::shapes::nurbs::nurbs_params;
 use crate::scene::shapes::quadric::{Quadric, QuadricKind};
 use crate::scene::shapes::{obj, ply};
+use crate::scene::transform::Transform;
 
 use super::SceneBuilder;
 use super::curves::{CurveSpec, curve_params};
@@ -82,10 +85,7 @@ impl SceneBuilder {
                 self.add_mesh(mesh).map(ShapeId::Mesh)
             }
             Built::Quadric(kind) => {
-                let world_from_object =
-                    xf.to_affine().map_err(|e| Error::at(loc, format!("Shape \"{}\": {e}", n.name)))?;
-                let object_from_world =
-                    xf.inverse().to_affine().map_err(|e| Error::at(loc, format!("Shape \"{}\": {e}", n.name)))?;
+                let [world_from_object, object_from_world] = placement(&xf, &n.name, loc)?;
                 let q = Quadric {
                     kind,
                     world_from_object,
@@ -98,12 +98,8 @@ impl SceneBuilder {
                 self.current_object.is_none().then_some(ShapeId::Quadric(id))
             }
             Built::Curves(spec) => {
-                let world_from_object =
-                    xf.to_affine().map_err(|e| Error::at(loc, format!("Shape \"{}\": {e}", n.name)))?;
-                let object_from_world =
-                    xf.inverse().to_affine().map_err(|e| Error::at(loc, format!("Shape \"{}\": {e}", n.name)))?;
+                let placement = placement(&xf, &n.name, loc)?;
                 let flip = reverse ^ xf.swaps_handedness();
-                let placement = [world_from_object, object_from_world];
                 for piece in spec.pieces {
                     let curve = Curve::new(piece.cp, piece.width, spec.kind, piece.normals, placement, flip)
                         .ok_or_else(|| Error::at(loc, "curve: a normal \"N\" is zero"))?;
@@ -189,6 +185,13 @@ impl SceneBuilder {
             ShapeId::Quadric(q) => self.quadric_info[q as usize].area_light = Some(id),
         }
     }
+}
+
+/// The affine object → world and world → object maps of a shape placed with `xf` (an error at the Shape when
+/// either is not finite or cannot be inverted).
+fn placement(xf: &Transform, shape: &str, loc: &SourceLoc) -> Result<[Affine3A; 2]> {
+    let at = |e: String| Error::at(loc, format!("Shape \"{shape}\": {e}"));
+    Ok([xf.to_affine().map_err(at)?, xf.inverse().to_affine().map_err(at)?])
 }
 
 /// Reads sphere/disk/cylinder/cone/paraboloid/hyperboloid parameters with pbrt-v3's defaults and clamping.

@@ -17,7 +17,7 @@
 use std::collections::HashMap;
 use std::f64::consts::PI;
 
-use super::mesh_data::MeshData;
+use super::mesh_data::{MeshData, triangle_indices};
 use crate::error::{Error, Result, SourceLoc, Warnings};
 use crate::parse::ParamList;
 
@@ -465,26 +465,7 @@ pub fn loopsubdiv_params(params: &ParamList, loc: &SourceLoc, warnings: &mut War
     let Some(p) = params.point3s("P")? else {
         return Err(Error::at(loc, "loopsubdiv: missing required parameter \"point3 P\""));
     };
-    if ix.len() % 3 != 0 {
-        return Err(Error::at(
-            &at("indices"),
-            format!("loopsubdiv: parameter \"indices\": {} values is not a multiple of 3", ix.len()),
-        ));
-    }
-    let mut indices = Vec::with_capacity(ix.len());
-    for (k, &v) in ix.iter().enumerate() {
-        if !(v >= 0.0 && v < p.len() as f64) {
-            return Err(Error::at(
-                &at("indices"),
-                format!(
-                    "loopsubdiv: parameter \"indices\": value {v} at position {k} is out of range: \
-                     there are {} vertices",
-                    p.len()
-                ),
-            ));
-        }
-        indices.push(v as u32);
-    }
+    let indices = triangle_indices(ix, p.len(), &at("indices"), "loopsubdiv: ")?;
     if let Some((i, q)) = p.iter().enumerate().find(|(_, q)| !q.iter().all(|c| c.is_finite())) {
         return Err(Error::at(
             &at("P"),

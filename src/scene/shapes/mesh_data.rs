@@ -4,9 +4,37 @@
 //! Input: nothing (the readers fill it in). Output: [`MeshData`], still in the file's own object space;
 //! the object-to-world transform is applied later by the scene builder.
 //!
-//! Depends on nothing else in the crate (the readers that fill it depend only on `error`); nothing here knows
-//! about transforms, materials or the BVH.
+//! Depends only on `error` (for the located message of [`triangle_indices`], shared by the shapes that read
+//! an `"integer indices"` array); nothing here knows about transforms, materials or the BVH.
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
+
+use crate::error::{Error, Result, SourceLoc};
+
+/// Checks an `"integer indices"` array (`ix`, written at `at`) of a triangle mesh over `nv` vertices: whole
+/// triangles, every index in range. Messages start with `prefix` (e.g. `"loopsubdiv: "`).
+pub fn triangle_indices(ix: &[f64], nv: usize, at: &SourceLoc, prefix: &str) -> Result<Vec<u32>> {
+    if !ix.len().is_multiple_of(3) {
+        return Err(Error::at(
+            at,
+            format!("{prefix}parameter \"indices\": {} values is not a multiple of 3", ix.len()),
+        ));
+    }
+    ix.iter()
+        .enumerate()
+        .map(|(k, &v)| {
+            if v >= 0.0 && v < nv as f64 {
+                Ok(v as u32)
+            } else {
+                Err(Error::at(
+                    at,
+                    format!(
+                        "{prefix}parameter \"indices\": value {v} at position {k} is out of range: there are {nv} vertices"
+                    ),
+                ))
+            }
+        })
+        .collect()
+}
 
 /// Triangles as read from a file, in the file's own (object) space.
 ///
