@@ -28,5 +28,6 @@ pub mod placement;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod shading;
 
 pub use error::{Error, Result, SourceLoc, Warning, Warnings};

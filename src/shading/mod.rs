@@ -1,0 +1,11 @@
+//! STAGE 5 (shading): what a surface does with light — textures evaluated at a hit, materials turned into
+//! BSDFs (pbrt-v3's BxDFs), and the light sources' sampling — the layer the per-pixel integrators and the
+//! cache applications shade with.
+//!
+//! Depends on `scene` (the stored materials, textures, lights and the surface interaction at a hit) and
+//! `sampling`; never on `render`, `placement` or `application`.
+
+pub mod texture;
+
+/// A linear RGB colour (pbrt-v3's `RGBSpectrum`; the film keeps RGB).
+pub type Spectrum = glam::Vec3A;
