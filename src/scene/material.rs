@@ -2,6 +2,7 @@
 //! parameters for the shading stage. The schemas list what each pbrt-v3 material reads (src/materials/*.cpp).
 //! `""`, `"none"` and `"interface"` give no BSDF: pbrt-v3's integrators pass straight through them.
 
+use crate::error::SourceLoc;
 use crate::scene::props::{Kind, Props};
 
 /// The material types of pbrt-v3.
@@ -200,12 +201,28 @@ pub struct Material {
     pub props: Props,
     /// For `mix`: the two blended materials, resolved.
     pub mix: Option<[u32; 2]>,
+    /// Where the type is named in the scene file (`None` for the built-in default), for warnings.
+    pub loc: Option<SourceLoc>,
+    /// Where each given parameter is written, for warnings about its value.
+    pub param_locs: Vec<(&'static str, SourceLoc)>,
 }
 
 impl Material {
     /// pbrt-v3's default material: matte with Kd 0.5.
     pub fn default_matte() -> Self {
-        Material { type_name: "matte".into(), kind: MaterialKind::Matte, props: Props::default(), mix: None }
+        Material {
+            type_name: "matte".into(),
+            kind: MaterialKind::Matte,
+            props: Props::default(),
+            mix: None,
+            loc: None,
+            param_locs: Vec::new(),
+        }
+    }
+
+    /// Where parameter `name` is written, else where the material is, if known.
+    pub fn loc_of(&self, name: &str) -> Option<&SourceLoc> {
+        self.param_locs.iter().find(|(n, _)| *n == name).map(|(_, l)| l).or(self.loc.as_ref())
     }
 
     /// Whether the surface has no BSDF (rays pass through it for shading, pbrt-v3 `bsdf == nullptr`).

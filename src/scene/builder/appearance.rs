@@ -24,7 +24,7 @@ impl SceneBuilder {
             None => {
                 self.warnings.at(type_loc, format!("unknown material type \"{type_name}\"; using matte"));
                 n.params.mark_all_used();
-                self.materials.push(Material::default_matte());
+                self.materials.push(Material { loc: Some(type_loc.clone()), ..Material::default_matte() });
                 return Ok(self.materials.len() as u32 - 1);
             }
         };
@@ -51,7 +51,16 @@ impl SceneBuilder {
             }
             mix = Some(ids);
         }
-        self.materials.push(Material { type_name: type_name.to_string(), kind, props, mix });
+        let param_locs =
+            kind.schema().iter().filter_map(|&(name, _)| n.params.loc_of(name).map(|l| (name, l.clone()))).collect();
+        self.materials.push(Material {
+            type_name: type_name.to_string(),
+            kind,
+            props,
+            mix,
+            loc: Some(type_loc.clone()),
+            param_locs,
+        });
         Ok(self.materials.len() as u32 - 1)
     }
 

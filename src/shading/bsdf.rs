@@ -1,0 +1,201 @@
+//! STAGE 5 (shading): pbrt-v3's `BSDF` — up to eight lobes in the shading frame of one surface point, with
+//! world-space queries (f, sample_f, pdf, ρ_hd) and the geometric-normal test that decides whether a pair
+//! of directions is reflection or transmission.
+//!
+//! Fixed-size storage (no allocation per hit). Each lobe carries a scale (pbrt-v3's `ScaledBxDF`, used by
+//! `mix`). Depends on [`super::bxdf`] and `sampling::Frame`; knows nothing of materials or textures.
+
+use glam::Vec3A;
+
+use super::Spectrum;
+use super::bxdf::fresnel_blend::ONE_MINUS_EPSILON;
+use super::bxdf::{Bxdf, BxdfFlags, LambertianReflection};
+use crate::sampling::Frame;
+
+/// pbrt-v3's `BSDF::MaxBxDFs`.
+pub const MAX_LOBES: usize = 8;
+
+/// A direction drawn from a BSDF (world space).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BsdfSample {
+    /// f(wo, wi) summed over the matching lobes (for a delta lobe: that lobe's value).
+    pub f: Spectrum,
+    /// The incident direction, unit length, world space.
+    pub wi: Vec3A,
+    /// Its density, averaged over the matching lobes as pbrt-v3 does (> 0).
+    pub pdf: f32,
+    /// The type of the lobe that was sampled.
+    pub sampled: BxdfFlags,
+}
+
+/// The scattering at one surface point: lobes in a shading frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bsdf {
+    /// Relative index of refraction across the surface (1 for opaque materials).
+    pub eta: f32,
+    ns: Vec3A,
+    ng: Vec3A,
+    ss: Vec3A,
+    ts: Vec3A,
+    n: usize,
+    lobes: [Bxdf; MAX_LOBES],
+    scales: [Spectrum; MAX_LOBES],
+}
+
+const EMPTY: Bxdf = Bxdf::Lambertian(LambertianReflection { r: Spectrum::ZERO });
+
+impl Bsdf {
+    /// An empty BSDF at a point with geometric normal `ng`, shading normal `ns` (unit, same side) and
+    /// ∂p/∂u `dpdu`: the frame is s = `dpdu` made orthogonal to `ns` and normalised (any tangent when that
+    /// is degenerate), t = ns × s.
+    pub fn new(ng: Vec3A, ns: Vec3A, dpdu: Vec3A, eta: f32) -> Self {
+        let tangent = dpdu - ns * ns.dot(dpdu);
+        let len = tangent.length();
+        let ss = if len > 1e-12 && len.is_finite() { tangent / len } else { Frame::from_normal(ns).s };
+        Bsdf { eta, ns, ng, ss, ts: ns.cross(ss), n: 0, lobes: [EMPTY; MAX_LOBES], scales: [Spectrum::ONE; MAX_LOBES] }
+    }
+
+    /// Adds a lobe with scale `scale`; returns false (and adds nothing) when all eight slots are taken.
+    pub fn add_scaled(&mut self, b: Bxdf, scale: Spectrum) -> bool {
+        if self.n == MAX_LOBES {
+            return false;
+        }
+        self.lobes[self.n] = b;
+        self.scales[self.n] = scale;
+        self.n += 1;
+        true
+    }
+
+    /// Adds a lobe at full weight; false when full.
+    pub fn add(&mut self, b: Bxdf) -> bool {
+        self.add_scaled(b, Spectrum::ONE)
+    }
+
+    /// Multiplies every lobe's scale by `s` (pbrt-v3's mix wraps each lobe in a `ScaledBxDF`).
+    pub fn scale_all(&mut self, s: Spectrum) {
+        for x in &mut self.scales[..self.n] {
+            *x *= s;
+        }
+    }
+
+    /// The lobes with their scales.
+    pub fn lobes(&self) -> impl Iterator<Item = (&Bxdf, Spectrum)> {
+        self.lobes[..self.n].iter().zip(self.scales[..self.n].iter().copied())
+    }
+
+    /// The shading normal.
+    pub fn shading_normal(&self) -> Vec3A {
+        self.ns
+    }
+
+    /// The geometric normal.
+    pub fn geometric_normal(&self) -> Vec3A {
+        self.ng
+    }
+
+    /// World → shading frame.
+    #[inline]
+    pub fn to_local(&self, v: Vec3A) -> Vec3A {
+        Vec3A::new(v.dot(self.ss), v.dot(self.ts), v.dot(self.ns))
+    }
+
+    /// Shading frame → world.
+    #[inline]
+    pub fn to_world(&self, v: Vec3A) -> Vec3A {
+        self.ss * v.x + self.ts * v.y + self.ns * v.z
+    }
+
+    /// How many lobes match `flags`.
+    pub fn num_components(&self, flags: BxdfFlags) -> usize {
+        self.lobes[..self.n].iter().filter(|b| b.flags().matches(flags)).count()
+    }
+
+    /// f(wo, wi) over the lobes matching `flags`; reflection lobes when wo and wi are on the same side of the
+    /// geometric normal, transmission lobes otherwise.
+    pub fn f(&self, wo: Vec3A, wi: Vec3A, flags: BxdfFlags) -> Spectrum {
+        let (wo_l, wi_l) = (self.to_local(wo), self.to_local(wi));
+        if wo_l.z == 0.0 {
+            return Spectrum::ZERO;
+        }
+        let reflect = wi.dot(self.ng) * wo.dot(self.ng) > 0.0;
+        self.f_local(wo_l, wi_l, reflect, flags)
+    }
+
+    fn f_local(&self, wo: Vec3A, wi: Vec3A, reflect: bool, flags: BxdfFlags) -> Spectrum {
+        let side = if reflect { BxdfFlags::REFLECTION } else { BxdfFlags::TRANSMISSION };
+        let mut f = Spectrum::ZERO;
+        for (b, s) in self.lobes() {
+            let t = b.flags();
+            if t.matches(flags) && t.intersects(side) {
+                f += s * b.f(wo, wi);
+            }
+        }
+        f
+    }
+
+    /// pbrt-v3's `BSDF::Sample_f`: picks one matching lobe with `u[0]` (then remapped to [0,1)), samples it,
+    /// and for a non-delta lobe returns f and the pdf over all matching lobes. `None` when nothing matches or
+    /// the lobe produced no direction. The returned f may still be black.
+    pub fn sample_f(&self, wo: Vec3A, u: [f32; 2], flags: BxdfFlags) -> Option<BsdfSample> {
+        let matching = self.num_components(flags);
+        if matching == 0 {
+            return None;
+        }
+        let comp = ((u[0] * matching as f32).floor() as usize).min(matching - 1);
+        let (idx, lobe) =
+            self.lobes[..self.n].iter().enumerate().filter(|(_, b)| b.flags().matches(flags)).nth(comp)?;
+        let u_remapped = [(u[0] * matching as f32 - comp as f32).min(ONE_MINUS_EPSILON), u[1]];
+        let wo_l = self.to_local(wo);
+        if wo_l.z == 0.0 {
+            return None;
+        }
+        let s = lobe.sample_f(wo_l, u_remapped)?;
+        if !(s.pdf > 0.0) {
+            return None;
+        }
+        let wi = self.to_world(s.wi);
+        let mut pdf = s.pdf;
+        let mut f = self.scales[idx] * s.f;
+        let specular = lobe.flags().intersects(BxdfFlags::SPECULAR);
+        if !specular && matching > 1 {
+            for (j, b) in self.lobes[..self.n].iter().enumerate() {
+                if j != idx && b.flags().matches(flags) {
+                    pdf += b.pdf(wo_l, s.wi);
+                }
+            }
+        }
+        if matching > 1 {
+            pdf /= matching as f32;
+        }
+        if !specular {
+            let reflect = wi.dot(self.ng) * wo.dot(self.ng) > 0.0;
+            f = self.f_local(wo_l, s.wi, reflect, flags);
+        }
+        Some(BsdfSample { f, wi, pdf, sampled: s.sampled })
+    }
+
+    /// Density of [`Bsdf::sample_f`] producing `wi`: the mean of the matching lobes' densities (delta lobes
+    /// count as 0).
+    pub fn pdf(&self, wo: Vec3A, wi: Vec3A, flags: BxdfFlags) -> f32 {
+        let (wo_l, wi_l) = (self.to_local(wo), self.to_local(wi));
+        if self.n == 0 || wo_l.z == 0.0 {
+            return 0.0;
+        }
+        let mut pdf = 0.0;
+        let mut matching = 0;
+        for b in &self.lobes[..self.n] {
+            if b.flags().matches(flags) {
+                matching += 1;
+                pdf += b.pdf(wo_l, wi_l);
+            }
+        }
+        if matching > 0 { pdf / matching as f32 } else { 0.0 }
+    }
+
+    /// pbrt-v3's `BSDF::rho(wo, …)` over all lobes: hemispherical-directional reflectance (reflection plus
+    /// transmission) estimated from the sample points `u` (exact for Lambertian lobes).
+    pub fn rho_hd(&self, wo: Vec3A, u: &[[f32; 2]]) -> Spectrum {
+        let wo_l = self.to_local(wo);
+        self.lobes().map(|(b, s)| s * b.rho_hd(wo_l, u)).sum()
+    }
+}
