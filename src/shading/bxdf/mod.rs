@@ -194,20 +194,25 @@ impl Bxdf {
     }
 
     /// pbrt-v3's `BxDF::rho(w, …)`: hemispherical-directional reflectance from the given sample points
-    /// (exact for the Lambertian lobes, which return their albedo).
+    /// (exact for the Lambertian lobes, which return their albedo; 0 for `wo` in the surface plane, where
+    /// pbrt-v3 would produce NaN).
     pub fn rho_hd(&self, wo: Vec3A, u: &[[f32; 2]]) -> Spectrum {
         match self {
             Bxdf::Lambertian(b) => return b.r,
             Bxdf::LambertianTransmission(b) => return b.t,
             _ => {}
         }
-        if u.is_empty() {
+        if u.is_empty() || wo.z == 0.0 {
             return Spectrum::ZERO;
         }
         let mut r = Spectrum::ZERO;
         for &ui in u {
             if let Some(s) = self.sample_f(wo, ui) {
-                r += s.f * local::abs_cos_theta(s.wi) / s.pdf;
+                let v = s.f * local::abs_cos_theta(s.wi) / s.pdf;
+                // A direction exactly in the surface plane has f = ∞ and cos = 0 for delta lobes; skip it.
+                if v.is_finite() {
+                    r += v;
+                }
             }
         }
         r / u.len() as f32
