@@ -829,6 +829,20 @@ fn bad_values_warn_at_their_parameter_and_never_give_nan() {
 }
 
 #[test]
+fn a_mix_whose_amount_is_a_missing_texture_warns_and_uses_one_half() {
+    let (m, t, w, id) = materials(
+        "MakeNamedMaterial \"a\" \"string type\" \"matte\" \"rgb Kd\" [1 1 1]\n\
+         MakeNamedMaterial \"b\" \"string type\" \"matte\" \"rgb Kd\" [0 0 0]\n\
+         Material \"mix\" \"string namedmaterial1\" \"a\" \"string namedmaterial2\" \"b\" \"texture amount\" \"nope\"",
+    );
+    let msgs: Vec<String> = w.iter().map(|w| w.to_string()).collect();
+    assert!(msgs.iter().any(|m| m.starts_with("mat.pbrt:4:") && m.contains("nope")), "{msgs:?}");
+    let b = m.bsdf(id as u32, &si(id as u32), &t).unwrap();
+    assert!((b.rho_hd(Vec3A::Z, &[[0.5, 0.5]]) - Spectrum::splat(0.5)).abs().max_element() < 1e-6);
+    assert_finite_everywhere("mix", &b);
+}
+
+#[test]
 fn extreme_but_legal_values_give_finite_results() {
     for body in [
         "Material \"metal\" \"rgb eta\" [0 0 0] \"rgb k\" [0 0 0]",

@@ -150,7 +150,7 @@ impl Bsdf {
             return None;
         }
         let s = lobe.sample_f(wo_l, u_remapped)?;
-        if !(s.pdf > 0.0) {
+        if s.pdf.is_nan() || s.pdf <= 0.0 {
             return None;
         }
         let wi = self.to_world(s.wi);
