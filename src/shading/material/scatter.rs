@@ -159,6 +159,8 @@ pub fn scatter(materials: &[Compiled], id: u32, hit: &Hit, depth: u32) -> Option
             b
         }
         Compiled::Mix { amount, materials: [m1, m2] } => {
+            // A part without a BSDF (`none`) adds no lobes (pbrt-v3 would dereference a null BSDF); lobes past
+            // the eighth are dropped (pbrt-v3 would abort; `Materials::build` warns).
             let s1 = hit.color(&amount);
             let s2 = clamp_spectrum(Spectrum::ONE - s1);
             let part = |id| if depth < MAX_MIX_DEPTH { scatter(materials, id, hit, depth + 1) } else { None };
