@@ -4,6 +4,7 @@
 
 use glam::Affine3A;
 
+use crate::error::SourceLoc;
 use crate::scene::props::{Kind, Props};
 
 /// Whether a texture yields floats or colours.
@@ -73,4 +74,6 @@ pub struct Texture {
     pub props: Props,
     /// Texture space ← world (the CTM at declaration, for 3-D mappings).
     pub texture_from_world: Affine3A,
+    /// Where the `Texture` directive is (for warnings about it when its image is read).
+    pub loc: SourceLoc,
 }
