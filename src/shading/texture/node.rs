@@ -65,7 +65,7 @@ pub enum Node {
     },
     /// 3-D `checkerboard` (`"integer dimension" 3`) in texture space.
     Checker3D {
-        /// Texture space ← world.
+        /// The transform applied to world points: the CTM at the `Texture` directive, as pbrt-v3 applies it.
         texture_from_world: Affine3A,
         /// Where ⌊x⌋ + ⌊y⌋ + ⌊z⌋ is even.
         tex1: Input,
