@@ -4,6 +4,7 @@
 
 use glam::Affine3A;
 
+use crate::error::SourceLoc;
 use crate::scene::props::{Kind, Props};
 
 /// Whether a texture yields floats or colours.
@@ -71,6 +72,9 @@ pub struct Texture {
     pub class: String,
     /// The values given.
     pub props: Props,
-    /// Texture space ← world (the CTM at declaration, for 3-D mappings).
+    /// Texture space ← world: the inverse of the CTM at declaration (pbrt-v3's spherical and cylindrical
+    /// mappings use it; its 3-D mappings apply the CTM itself, i.e. this transform's inverse).
     pub texture_from_world: Affine3A,
+    /// Where the `Texture` directive is (for warnings about it when its image is read).
+    pub loc: SourceLoc,
 }

@@ -150,7 +150,14 @@ impl SceneBuilder {
         let texture_from_world =
             self.ctm[0].inverse().to_affine().map_err(|e| Error::at(loc, format!("Texture: {e}")))?;
         let id = self.textures.len() as u32;
-        self.textures.push(Texture { name: name.clone(), value, class: class_name, props, texture_from_world });
+        self.textures.push(Texture {
+            name: name.clone(),
+            value,
+            class: class_name,
+            props,
+            texture_from_world,
+            loc: loc.clone(),
+        });
         let scope = Rc::make_mut(&mut self.gs.textures);
         let map = if value == TextureValue::Float { &mut scope.float } else { &mut scope.spectrum };
         if map.insert(name.clone(), id).is_some() {
