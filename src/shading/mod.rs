@@ -5,6 +5,7 @@
 //! Depends on `scene` (the stored materials, textures, lights and the surface interaction at a hit) and
 //! `sampling`; never on `render`, `placement` or `application`.
 
+pub mod light;
 pub mod texture;
 
 /// A linear RGB colour (pbrt-v3's `RGBSpectrum`; the film keeps RGB).
