@@ -526,3 +526,51 @@ fn point_spot_and_distant_lights_on_a_floor_match_pbrt_v3() {
     let (_, share, rmse) = compare("delta", &ours, &pbrt, 2e-3);
     assert!(share < 0.01 && rmse < 0.01, "delta-light irradiance differs from pbrt-v3");
 }
+
+#[test]
+fn the_shared_scenes_lights_build() {
+    let Some(dir) = common::shared_scenes() else { return };
+    let mut files: Vec<PathBuf> = [
+        "bitterli-cornell-box-v3/scene.pbrt",
+        "bitterli-bathroom/scene-v3.pbrt",
+        "bitterli-staircase2/scene-v3.pbrt",
+        "pbrtv3scenes-veach-mis/mis.pbrt",
+        "pbrtv3scenes-buddha-fractal/buddha-fractal.pbrt",
+    ]
+    .iter()
+    .map(|f| dir.join(f))
+    .collect();
+    if let Ok(rd) = std::fs::read_dir(dir.join("hackmad-pbrt-v3-rs-tests/lights")) {
+        let mut extra: Vec<PathBuf> = rd
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|e| e == "pbrt"))
+            .collect();
+        extra.sort();
+        files.extend(extra);
+    }
+    for f in files {
+        let loaded = match cachert::scene::load(&f, LoadOptions::default()) {
+            Ok(l) => l,
+            Err(e) => {
+                println!("{}: not loaded ({e}); skipped", f.display());
+                continue;
+            }
+        };
+        let mut w = Warnings::default();
+        let l = Lights::build(&loaded.scene, &mut w).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+        println!("{}: {:?}", f.display(), l.type_counts());
+        for m in w.iter() {
+            println!("  {m}");
+        }
+        let name = f.file_name().unwrap().to_string_lossy();
+        if name.contains("goniometric") || name.contains("projection") {
+            // Refused, with a warning at the LightSource.
+            assert!(l.is_empty() && w.iter().any(|m| m.msg.contains("not supported")), "{}", f.display());
+            continue;
+        }
+        assert!(!l.is_empty(), "{}: no lights", f.display());
+        let sel = LightSelect::new(&l, "power").unwrap();
+        let total: f32 = (0..l.len()).map(|i| sel.pmf(i)).sum();
+        assert!((total - 1.0).abs() < 1e-3, "{}: pmf sums to {total}", f.display());
+    }
+}
