@@ -3,6 +3,7 @@
 
 use glam::Affine3A;
 
+use crate::error::SourceLoc;
 use crate::scene::props::{Kind, Props};
 
 use Kind::*;
@@ -42,6 +43,8 @@ pub struct Light {
     pub props: Props,
     /// World ← light space (the CTM at the directive).
     pub world_from_light: Affine3A,
+    /// Where the `LightSource` directive is (for messages about its values).
+    pub loc: SourceLoc,
 }
 
 /// An emitting shape: a mesh or quadric with a diffuse area light.
@@ -51,4 +54,6 @@ pub struct AreaLight {
     pub props: Props,
     /// The emitting shape.
     pub shape: crate::scene::geometry::ShapeId,
+    /// Where the `AreaLightSource` directive is (for messages about its values).
+    pub loc: SourceLoc,
 }

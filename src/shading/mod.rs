@@ -7,6 +7,7 @@
 
 pub mod bsdf;
 pub mod bxdf;
+pub mod light;
 pub mod material;
 pub mod texture;
 

@@ -178,7 +178,7 @@ impl SceneBuilder {
             .read(&n.params, schema, &mut props)?;
         self.report_unused(&n.params, "LightSource");
         let world_from_light = self.ctm[0].to_affine().map_err(|e| Error::at(loc, format!("LightSource: {e}")))?;
-        self.lights.push(Light { type_name: n.name, props, world_from_light });
+        self.lights.push(Light { type_name: n.name, props, world_from_light, loc: loc.clone() });
         Ok(())
     }
 

@@ -170,7 +170,7 @@ impl SceneBuilder {
     }
 
     fn attach_area_light(&mut self, shape: Option<ShapeId>, loc: &SourceLoc) {
-        let Some((props, _)) = self.gs.area_light.clone() else { return };
+        let Some((props, light_loc)) = self.gs.area_light.clone() else { return };
         let Some(shape) = shape else {
             self.warnings.at(
                 loc,
@@ -179,7 +179,7 @@ impl SceneBuilder {
             return;
         };
         let id = self.area_lights.len() as u32;
-        self.area_lights.push(AreaLight { props, shape });
+        self.area_lights.push(AreaLight { props, shape, loc: light_loc });
         match shape {
             ShapeId::Mesh(m) => self.meshes[m as usize].area_light = Some(id),
             ShapeId::Quadric(q) => self.quadric_info[q as usize].area_light = Some(id),

@@ -1,0 +1,282 @@
+//! STAGE 5 (shading): the scene's light sources as pbrt-v3 samples them — point, spot, distant, infinite
+//! (constant or environment map) and diffuse area lights (one light per triangle of an emitting mesh, one
+//! per emitting analytic shape) — behind one world-space interface: [`Lights::sample_li`] /
+//! [`Lights::pdf_li`] for light sampling, [`Lights::emitted`] / [`Lights::le_escaped`] for radiance that rays
+//! find, and [`LightSelect`] for choosing a light uniformly or by power.
+//!
+//! Built once per scene from `scene::light` records; triangle lights borrow the scene's meshes (a light is
+//! an index). Nothing here allocates per call. Depends on `scene` (geometry, stored lights, rays),
+//! `sampling` and `image` (environment maps); never on `render`, `placement` or `application`.
+
+pub mod area;
+mod build;
+pub mod distant;
+pub mod distribution;
+pub mod envmap;
+pub mod infinite;
+pub mod point;
+mod select;
+pub mod shape_sampler;
+pub mod spot;
+
+use glam::Vec3A;
+
+use crate::scene::accel::PrimRef;
+use crate::scene::geometry::{Geometry, SurfaceInteraction};
+use crate::scene::ray::{Ray, offset_ray_origin};
+use crate::shading::Spectrum;
+
+pub use area::{Emission, SurfacePoint};
+pub use select::LightSelect;
+
+use distant::DistantLight;
+use infinite::InfiniteLight;
+use point::PointLight;
+use shape_sampler::ShapeSampler;
+use spot::SpotLight;
+
+/// pbrt-v3's `ShadowEpsilon`: shadow rays toward a light point stop this fraction short of it.
+pub const SHADOW_EPSILON: f32 = 1e-4;
+
+/// One sample toward a light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightSample {
+    /// Incident radiance (before visibility).
+    pub li: Spectrum,
+    /// Unit world direction toward the light.
+    pub wi: Vec3A,
+    /// Solid-angle density of `wi` (1 for delta lights).
+    pub pdf: f32,
+    /// The visibility test: for a light point, pbrt-v3's `SpawnRayTo` from the surface to it (direction not
+    /// normalised, `t_max` = 1 − [`SHADOW_EPSILON`]); for distant and infinite lights an unbounded ray along
+    /// `wi`. The light is unoccluded when nothing intersects it.
+    pub shadow: Ray,
+    /// Whether the light is a delta light (point, spot, distant): no BSDF-sampled ray can find it.
+    pub is_delta: bool,
+}
+
+/// What a light is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Kind {
+    Point(PointLight),
+    Spot(SpotLight),
+    Distant(DistantLight),
+    /// Index into `Lights::infinite`.
+    Infinite(u32),
+    /// Triangle `tri` of world mesh `mesh`, emitting as scene area light `area`.
+    Triangle {
+        area: u32,
+        mesh: u32,
+        tri: u32,
+    },
+    /// Analytic shape `quadric`, emitting as scene area light `area`.
+    Shape {
+        area: u32,
+        quadric: u32,
+        sampler: ShapeSampler,
+    },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Entry {
+    kind: Kind,
+    power: Spectrum,
+    samples: u32,
+}
+
+/// Marks a triangle or shape that emits but is not light-sampled (zero area or power, or a hyperboloid).
+const NO_LIGHT: u32 = u32::MAX;
+
+/// The scene's lights, ready to sample. Borrows the scene's geometry (triangle lights refer to its meshes).
+#[derive(Debug)]
+pub struct Lights<'a> {
+    geometry: &'a Geometry,
+    entries: Vec<Entry>,
+    infinite: Vec<InfiniteLight>,
+    /// Per scene area light: what it emits.
+    emission: Vec<Emission>,
+    /// Per scene area light: where its triangles' (or its shape's) light indices start in `slots`.
+    first_slot: Vec<u32>,
+    /// Light index of each emitting triangle/shape, or [`NO_LIGHT`].
+    slots: Vec<u32>,
+}
+
+impl<'a> Lights<'a> {
+    /// Number of lights (each emitting triangle counts as one, as in pbrt-v3).
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Whether there are no lights.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+
+    /// Whether light `light` is a delta light (point, spot or distant).
+    #[inline]
+    pub fn is_delta(&self, light: usize) -> bool {
+        matches!(self.entries[light].kind, Kind::Point(_) | Kind::Spot(_) | Kind::Distant(_))
+    }
+
+    /// pbrt-v3's `nSamples` of light `light` (`"nsamples"`, overridden by `"samples"`), at least 1.
+    #[inline]
+    pub fn samples(&self, light: usize) -> u32 {
+        self.entries[light].samples
+    }
+
+    /// pbrt-v3's `Power()` of light `light` (RGB).
+    pub fn power(&self, light: usize) -> Spectrum {
+        self.entries[light].power
+    }
+
+    /// How many lights of each type, sorted by name (`"area (triangle)"`, `"area (sphere)"`, `"point"`, …).
+    pub fn type_counts(&self) -> Vec<(String, usize)> {
+        let mut counts: Vec<(String, usize)> = Vec::new();
+        for e in &self.entries {
+            let name = match e.kind {
+                Kind::Point(_) => "point",
+                Kind::Spot(_) => "spot",
+                Kind::Distant(_) => "distant",
+                Kind::Infinite(_) => "infinite",
+                Kind::Triangle { .. } => "area (triangle)",
+                Kind::Shape { quadric, .. } => match self.geometry.accel.quadrics[quadric as usize].kind {
+                    crate::scene::shapes::quadric::QuadricKind::Sphere { .. } => "area (sphere)",
+                    crate::scene::shapes::quadric::QuadricKind::Disk { .. } => "area (disk)",
+                    crate::scene::shapes::quadric::QuadricKind::Cylinder { .. } => "area (cylinder)",
+                    crate::scene::shapes::quadric::QuadricKind::Cone { .. } => "area (cone)",
+                    crate::scene::shapes::quadric::QuadricKind::Paraboloid { .. } => "area (paraboloid)",
+                    crate::scene::shapes::quadric::QuadricKind::Hyperboloid { .. } => "area (hyperboloid)",
+                },
+            };
+            match counts.iter_mut().find(|(n, _)| n == name) {
+                Some(c) => c.1 += 1,
+                None => counts.push((name.to_string(), 1)),
+            }
+        }
+        counts.sort();
+        counts
+    }
+
+    /// Samples light `light` from surface point `si` with the 2D sample `u`. `None` when the sample carries
+    /// nothing (zero pdf, zero radiance, the back of a one-sided emitter, `si` at the light's point).
+    #[inline]
+    pub fn sample_li(&self, light: usize, si: &SurfaceInteraction, u: [f32; 2]) -> Option<LightSample> {
+        let e = &self.entries[light];
+        let (li, wi, pdf, shadow) = match e.kind {
+            Kind::Point(l) => {
+                let (li, wi) = l.li(si.p)?;
+                (li, wi, 1.0, spawn_ray_to(si, &SurfacePoint { p: l.p, p_error: Vec3A::ZERO, n: Vec3A::ZERO }))
+            }
+            Kind::Spot(l) => {
+                let (li, wi) = l.li(si.p)?;
+                (li, wi, 1.0, spawn_ray_to(si, &SurfacePoint { p: l.p, p_error: Vec3A::ZERO, n: Vec3A::ZERO }))
+            }
+            Kind::Distant(l) => (l.l, l.w, 1.0, si.spawn_ray(l.w)),
+            Kind::Infinite(i) => {
+                let (li, wi, pdf) = self.infinite[i as usize].sample(u)?;
+                (li, wi, pdf, si.spawn_ray(wi))
+            }
+            Kind::Triangle { area, mesh, tri } => {
+                let sp = area::sample_triangle(&self.geometry.meshes[mesh as usize], tri as usize, u);
+                let a = area::triangle_area(&self.geometry.meshes[mesh as usize], tri as usize);
+                let pdf = shape_sampler::solid_angle_factor(si.p, &sp)? / a;
+                let wi = (sp.p - si.p).normalize();
+                (self.emission[area as usize].l(sp.n, -wi), wi, pdf, spawn_ray_to(si, &sp))
+            }
+            Kind::Shape { area, quadric, sampler } => {
+                let q = &self.geometry.accel.quadrics[quadric as usize];
+                let (sp, pdf) = sampler.sample(q, (si.p, si.p_error, si.ng), u)?;
+                let d = sp.p - si.p;
+                if d.length_squared() == 0.0 {
+                    return None;
+                }
+                let wi = d.normalize();
+                (self.emission[area as usize].l(sp.n, -wi), wi, pdf, spawn_ray_to(si, &sp))
+            }
+        };
+        if !(pdf > 0.0 && pdf.is_finite()) || li == Spectrum::ZERO || !wi.is_finite() {
+            return None;
+        }
+        Some(LightSample { li, wi, pdf, shadow, is_delta: self.is_delta(light) })
+    }
+
+    /// The solid-angle density with which [`Lights::sample_li`] picks direction `wi` from `si` (0 for delta
+    /// lights and for directions that miss the light). For area lights this intersects the light's own
+    /// shape, as pbrt-v3's `Shape::Pdf` does; when the ray's scene hit is known use [`Lights::pdf_li_hit`].
+    pub fn pdf_li(&self, light: usize, si: &SurfaceInteraction, wi: Vec3A) -> f32 {
+        match self.entries[light].kind {
+            Kind::Point(_) | Kind::Spot(_) | Kind::Distant(_) => 0.0,
+            Kind::Infinite(i) => self.infinite[i as usize].pdf(wi),
+            Kind::Triangle { mesh, tri, .. } => {
+                let m = &self.geometry.meshes[mesh as usize];
+                let ray = si.spawn_ray(wi);
+                match area::intersect_triangle(m, tri as usize, &ray) {
+                    Some(h) => shape_sampler::solid_angle_factor(si.p, &h)
+                        .map_or(0.0, |f| f / area::triangle_area(m, tri as usize)),
+                    None => 0.0,
+                }
+            }
+            Kind::Shape { quadric, sampler, .. } => {
+                sampler.pdf_dir(&self.geometry.accel.quadrics[quadric as usize], (si.p, si.p_error, si.ng), wi)
+            }
+        }
+    }
+
+    /// [`Lights::pdf_li`] for a ray from `si` that hit light `light`'s shape at `hit` (the MIS weight of a
+    /// BSDF-sampled direction); 0 when `light` is not an area light.
+    #[inline]
+    pub fn pdf_li_hit(&self, light: usize, si: &SurfaceInteraction, hit: &SurfaceInteraction) -> f32 {
+        let sp = SurfacePoint { p: hit.p, p_error: hit.p_error, n: hit.ng };
+        let pdf = match self.entries[light].kind {
+            Kind::Triangle { mesh, tri, .. } => shape_sampler::solid_angle_factor(si.p, &sp)
+                .map_or(0.0, |f| f / area::triangle_area(&self.geometry.meshes[mesh as usize], tri as usize)),
+            Kind::Shape { quadric, sampler, .. } => {
+                sampler.pdf_at(&self.geometry.accel.quadrics[quadric as usize], (si.p, si.p_error, si.ng), &sp)
+            }
+            _ => 0.0,
+        };
+        if pdf.is_finite() { pdf } else { 0.0 }
+    }
+
+    /// Radiance an area light emits from `hit` toward `w` (pbrt-v3 `SurfaceInteraction::Le`); 0 when the
+    /// surface does not emit or `w` is on the unlit side of a one-sided emitter.
+    #[inline]
+    pub fn emitted(&self, hit: &SurfaceInteraction, w: Vec3A) -> Spectrum {
+        match hit.area_light {
+            Some(a) => self.emission.get(a as usize).map_or(Spectrum::ZERO, |e| e.l(hit.ng, w)),
+            None => Spectrum::ZERO,
+        }
+    }
+
+    /// The light index of the emitter at `hit`, or `None` when it does not emit or is not light-sampled
+    /// (then its [`Lights::emitted`] radiance can only be found by rays, and counts in full).
+    #[inline]
+    pub fn light_of_hit(&self, hit: &SurfaceInteraction) -> Option<usize> {
+        let a = hit.area_light? as usize;
+        let first = *self.first_slot.get(a)? as usize;
+        let k = match hit.origin.prim {
+            PrimRef::Triangle { tri, .. } => tri as usize,
+            PrimRef::Quadric(_) => 0,
+            _ => return None,
+        };
+        match self.slots.get(first + k) {
+            Some(&l) if l != NO_LIGHT => Some(l as usize),
+            _ => None,
+        }
+    }
+
+    /// The radiance of all infinite lights seen by a ray that hits nothing (pbrt-v3 `Light::Le`).
+    #[inline]
+    pub fn le_escaped(&self, ray: &Ray) -> Spectrum {
+        self.infinite.iter().map(|l| l.le(ray.d)).sum()
+    }
+}
+
+/// pbrt-v3 `Interaction::SpawnRayTo(Interaction)`: from `si`, offset off its surface, toward the light point
+/// `to`, itself offset off its surface; `t_max` stops just short of it.
+#[inline]
+pub fn spawn_ray_to(si: &SurfaceInteraction, to: &SurfacePoint) -> Ray {
+    let origin = offset_ray_origin(si.p, si.p_error, si.ng, to.p - si.p);
+    let target = offset_ray_origin(to.p, to.p_error, to.n, origin - to.p);
+    Ray { o: origin, d: target - origin, t_max: 1.0 - SHADOW_EPSILON }
+}
