@@ -44,7 +44,7 @@ VARIANTS=(
   'path-buddha-fractal|pbrtv3scenes-buddha-fractal|buddha-fractal.pbrt|Integrator "path" "integer maxdepth" [5]|3000|80|128'
   # 3. the non-default light selection strategies on the Cornell box
   'direct-one-cornell|bitterli-cornell-box-v3|scene.pbrt|Integrator "directlighting" "string strategy" ["one"] "integer maxdepth" [5]|10000|128|128'
-  'path-uniform-cornell|bitterli-cornell-box-v3|scene.pbrt|Integrator "path" "integer maxdepth" [5] "string lightsamplestrategy" ["uniform"]|2800|128|128'
+  'path-uniform-cornell|bitterli-cornell-box-v3|scene.pbrt|Integrator "path" "integer maxdepth" [5] "string lightsamplestrategy" ["uniform"]|1400|128|128'
   # 2. directlighting (strategy all, maxdepth 5) on hackmad feature scenes, whose "whitted" is replaced
   "direct-point|$H/lights|point.pbrt|$DL|4096|96|96"
   "direct-spot|$H/lights|spot.pbrt|$DL|4096|96|96"
@@ -59,12 +59,12 @@ VARIANTS=(
   "direct-uber|$H/materials|uber.pbrt|$DL|4096|80|80|$DRAGON;$WELLS"
   "direct-mix|$H/materials|mix.pbrt|$DL|2048|80|80|$DRAGON;$WELLS"
   "direct-translucent|$H/materials|translucent.pbrt|$DL|4096|80|80|$DRAGON;$WELLS"
-  "direct-mirror|$H/materials|mirror.pbrt|$DL|4096|80|80|$DRAGON;$WELLS"
-  "direct-2d-checkerboard|$H/textures|2d-checkerboard.pbrt|$DL|3072|96|96"
-  "direct-2d-mappings|$H/textures|2d-mappings.pbrt|$DL|3072|128|64"
-  "direct-trilinear-filtering|$H/textures|trilinear-filtering.pbrt|$DL|3072|96|96|$LINES"
-  "direct-scale|$H/textures|scale.pbrt|$DL|3072|96|96"
-  "direct-mix-texture|$H/textures|mix.pbrt|$DL|3072|96|96"
+  "direct-mirror|$H/materials|mirror.pbrt|$DL|2048|80|80|$DRAGON;$WELLS"
+  "direct-2d-checkerboard|$H/textures|2d-checkerboard.pbrt|$DL|1536|96|96"
+  "direct-2d-mappings|$H/textures|2d-mappings.pbrt|$DL|1536|128|64"
+  "direct-trilinear-filtering|$H/textures|trilinear-filtering.pbrt|$DL|1536|96|96|$LINES"
+  "direct-scale|$H/textures|scale.pbrt|$DL|1536|96|96"
+  "direct-mix-texture|$H/textures|mix.pbrt|$DL|1536|96|96"
 )
 
 # Strips the Integrator, Sampler and Film directives (with their continuation lines) before WorldBegin.
