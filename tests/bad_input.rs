@@ -388,7 +388,7 @@ fn truncated_binary_ply() {
 }
 
 #[test]
-fn missing_texture_file_warns_and_falls_back_to_a_constant() {
+fn missing_texture_file_warns_and_becomes_pbrt_v3s_grey() {
     let dir = TempDir::new("texture-missing");
     let body = "Texture \"wood\" \"spectrum\" \"imagemap\" \"string filename\" \"textures/wood.png\"\n\
                 Material \"matte\" \"texture Kd\" \"wood\"\n\
@@ -399,16 +399,25 @@ fn missing_texture_file_warns_and_falls_back_to_a_constant() {
     assert_eq!(
         warnings,
         vec![format!(
-            "{}:6:38: warning: texture \"wood\": cannot read image \"{}\"; using the constant 1",
+            "{}:6:38: warning: texture \"wood\": cannot read image \"{}\"; using pbrt-v3's grey 0.5 texel",
             path.display(),
             dir.path("textures/wood.png").display()
         )]
     );
     let t = &loaded.scene.textures[0];
-    assert_eq!((t.name.as_str(), t.class.as_str()), ("wood", "constant"));
-    // And the scene still renders.
+    assert_eq!((t.name.as_str(), t.class.as_str()), ("wood", "imagemap"));
+    // And the scene still renders, with ambient occlusion and with shading (where the texture is pbrt-v3's
+    // grey texel, 0.5 sRGB-decoded for a PNG); no second warning from the shading stage.
     let out = render_loaded(&loaded, &settings(0)).expect("renders");
     assert!(common::mean(&out.image) > 0.0);
+    let mut w = cachert::Warnings::default();
+    let textures = cachert::shading::texture::Textures::build(&loaded.scene, &mut w).expect("builds");
+    assert_eq!(w.len(), 0, "{w:?}");
+    let [w, h] = loaded.scene.film.resolution;
+    let ray = loaded.scene.camera.generate_ray([w as f32 / 2.0, h as f32 / 2.0], [0.5, 0.5]);
+    let si = loaded.scene.geometry.intersect(&ray).expect("the centre sees the sphere");
+    let v = textures.spectrum(0, &si);
+    assert!((v.x - 0.214_041).abs() < 1e-5, "{v:?}");
 }
 
 #[test]
@@ -459,7 +468,7 @@ fn failed_runs_leave_no_file_behind() {
     dir.write("good.pbrt", world("Shape \"sphere\""));
     dir.write("bad.pbrt", world("Shape \"sphere\" \"float radius\" [-1]"));
     let path_message = format!(
-        "error: integrator \"path\" is not implemented by cachert (available: {}); choose one with --integrator",
+        "error: integrator \"bdpt\" is not implemented by cachert (available: {}); choose one with --integrator",
         cachert::render::INTEGRATORS.join(", ")
     );
     let cases: [(&[&str], &str); 6] = [
@@ -476,7 +485,7 @@ fn failed_runs_leave_no_file_behind() {
             &["render", "good.pbrt", "--outfile", "out.exr", "--set", "nsamples=many"],
             "error: --set nsamples=many: expected an integer",
         ),
-        (&["render", "good.pbrt", "--outfile", "out.exr", "--integrator", "path"], &path_message),
+        (&["render", "good.pbrt", "--outfile", "out.exr", "--integrator", "bdpt"], &path_message),
         (
             &["render", "good.pbrt", "--outfile", "out.xyz"],
             "error: \"out.xyz\": unknown image file extension; use .exr, .pfm or .png",

@@ -48,8 +48,15 @@ pub fn run(args: &InfoArgs) -> Result<String> {
         st.triangles
     );
     let _ = writeln!(o, "instances   {instances} ({instanced} triangles if flattened)");
-    let _ = writeln!(o, "lights      {} + {} area lights", s.lights.len(), s.area_lights.len());
-    let _ = writeln!(o, "materials   {}  textures {}", s.materials.len(), s.textures.len());
+    let mut light_types = by_type(s.lights.iter().map(|l| l.type_name.as_str()));
+    if !s.area_lights.is_empty() {
+        light_types.push(("diffuse area (shapes)".to_string(), s.area_lights.len()));
+    }
+    let _ = writeln!(o, "lights      {}{}", s.lights.len() + s.area_lights.len(), listing(&light_types));
+    let material_types = by_type(s.materials.iter().map(|m| m.type_name.as_str()));
+    let _ = writeln!(o, "materials   {}{}", s.materials.len(), listing(&material_types));
+    let texture_types = by_type(s.textures.iter().map(|t| t.class.as_str()));
+    let _ = writeln!(o, "textures    {}{}", s.textures.len(), listing(&texture_types));
     match s.bounds() {
         Some((lo, hi)) => {
             let _ =
@@ -75,4 +82,26 @@ fn instance_triangles(s: &crate::scene::Scene) -> usize {
     let per_object: Vec<usize> =
         s.geometry.objects.iter().map(|o| o.meshes.iter().map(|m| m.triangle_count()).sum()).collect();
     (0..s.geometry.accel.counts().2).map(|i| per_object[s.geometry.accel.instance(i as u32).object as usize]).sum()
+}
+
+/// Counts names, in order of first appearance.
+fn by_type<'a>(names: impl Iterator<Item = &'a str>) -> Vec<(String, usize)> {
+    let mut out: Vec<(String, usize)> = Vec::new();
+    for n in names {
+        let n = if n.is_empty() { "none" } else { n };
+        match out.iter_mut().find(|(t, _)| t == n) {
+            Some(e) => e.1 += 1,
+            None => out.push((n.to_string(), 1)),
+        }
+    }
+    out
+}
+
+/// ": a 2, b 1" (empty for no entries).
+fn listing(types: &[(String, usize)]) -> String {
+    if types.is_empty() {
+        return String::new();
+    }
+    let parts: Vec<String> = types.iter().map(|(t, n)| format!("{t} {n}")).collect();
+    format!(": {}", parts.join(", "))
 }

@@ -7,9 +7,12 @@ pub mod ao;
 pub mod cache_stats;
 pub mod cacheao;
 pub mod cached;
+pub mod directlighting;
 mod driver;
 pub mod film;
+pub mod lighting;
 pub mod params;
+pub mod path;
 pub mod samples;
 
 pub use driver::render_image;
@@ -74,7 +77,7 @@ pub struct RenderOutput {
 }
 
 /// The integrators cachert implements, by scene-file name.
-pub const INTEGRATORS: [&str; 2] = ["ambientocclusion", "cacheao"];
+pub const INTEGRATORS: [&str; 4] = ["ambientocclusion", "cacheao", "directlighting", "path"];
 
 /// Builds the integrator named by the scene (or by `settings.integrator`) and renders.
 pub fn render(
@@ -130,6 +133,10 @@ pub fn render(
     let iparams = params::IntegratorParams::new(params, &settings.set);
     let pixel: Box<dyn PixelIntegrator> = match name {
         "ambientocclusion" => Box::new(ao::AmbientOcclusion::from_params(&iparams, &sampler, settings.quick)?),
+        "directlighting" => {
+            Box::new(directlighting::DirectLighting::from_params(&iparams, scene, &sampler, settings.quick, warnings)?)
+        }
+        "path" => Box::new(path::Path::from_params(&iparams, scene, warnings)?),
         other => {
             return Err(Error::usage(format!(
                 "integrator \"{other}\" is not implemented by cachert (available: {}); choose one with --integrator",

@@ -148,3 +148,54 @@ pub fn file_matches_pbrt_pair(dir: &Path, scene: &str) -> LoadedScene {
     );
     loaded
 }
+
+/// Averages `f`×`f` blocks of pixels: a box-filtered pbrt-v3 reference at `f`× our resolution becomes the
+/// same estimator at ours.
+pub fn downsample(im: &Image, f: usize) -> Image {
+    let (w, h) = (im.width / f, im.height / f);
+    let mut out = Image::new(w, h);
+    for y in 0..h {
+        for x in 0..w {
+            let mut c = [0.0f32; 3];
+            for dy in 0..f {
+                for dx in 0..f {
+                    let p = im.get(x * f + dx, y * f + dy);
+                    (0..3).for_each(|k| c[k] += p[k]);
+                }
+            }
+            out.set(x, y, c.map(|v| v / (f * f) as f32));
+        }
+    }
+    out
+}
+
+/// Compares two renders of ours (`a`, `b`: the same estimator, two seeds) with one pbrt-v3 reference that
+/// used `ref_per_ours` times as many samples per (our) pixel. The noise model: σ² = RMSE(a, b)²/2 is the
+/// variance of one of our renders, pbrt-v3's is σ²/ref_per_ours, so a correct renderer lands at
+/// RMSE(a, ref) ≈ σ·√(1 + 1/ref_per_ours). Asserts RMSE(a, ref) ≤ 1.3× that and the mean within `mean_tol`
+/// (relative), printing the figures. With `CACHERT_DUMP_DIR` set, `a` is written there for inspection.
+pub fn assert_matches_pbrt_single(
+    name: &str,
+    a: &Image,
+    b: &Image,
+    reference: &Image,
+    ref_per_ours: f64,
+    mean_tol: f64,
+) {
+    let sigma = cachert::metrics::rmse(a, b).expect("same size") / 2f64.sqrt();
+    let floor = sigma * (1.0 + 1.0 / ref_per_ours).sqrt();
+    let err = cachert::metrics::rmse(a, reference).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let (m_ours, m_theirs) = (mean(a), mean(reference));
+    let dev = (m_ours - m_theirs).abs() / m_theirs.abs().max(1e-12);
+    if let Some(dump) = std::env::var_os("CACHERT_DUMP_DIR") {
+        cachert::image::write(a, &Path::new(&dump).join(format!("{name}-ours.pfm"))).expect("dump");
+    }
+    eprintln!(
+        "{name}: RMSE {err:.5}, noise floor {floor:.5}, ratio {:.3}; mean {m_ours:.5} vs pbrt-v3 {m_theirs:.5} ({:.3} %)",
+        err / floor,
+        100.0 * dev
+    );
+    assert!(a.first_non_finite().is_none(), "{name}: a non-finite pixel");
+    assert!(err <= 1.3 * floor, "{name}: RMSE {err} is {:.2}× the noise floor {floor}", err / floor);
+    assert!(dev <= mean_tol, "{name}: mean {m_ours} vs pbrt-v3's {m_theirs}");
+}

@@ -131,10 +131,11 @@ impl SceneBuilder {
                     && !std::path::Path::new(file).is_file()
                 {
                     let floc = class.params.loc_of("filename").unwrap_or(&class.name_loc);
-                    self.warnings
-                        .at(floc, format!("texture \"{name}\": cannot read image \"{file}\"; using the constant 1"));
-                    props = Props::default();
-                    class_name = "constant".into();
+                    // Said once, here at load; the shading stage puts pbrt-v3's grey texel in its place.
+                    self.warnings.at(
+                        floc,
+                        format!("texture \"{name}\": cannot read image \"{file}\"; using pbrt-v3's grey 0.5 texel"),
+                    );
                 }
             }
             None => {

@@ -17,6 +17,7 @@ pub mod infinite;
 pub mod point;
 mod select;
 pub mod shape_sampler;
+pub mod spatial;
 pub mod spot;
 
 use glam::Vec3A;
@@ -28,6 +29,7 @@ use crate::shading::Spectrum;
 
 pub use area::{Emission, SurfacePoint};
 pub use select::LightSelect;
+pub use spatial::SpatialSelect;
 
 use distant::DistantLight;
 use infinite::InfiniteLight;
@@ -262,6 +264,16 @@ impl<'a> Lights<'a> {
         match self.slots.get(first + k) {
             Some(&l) if l != NO_LIGHT => Some(l as usize),
             _ => None,
+        }
+    }
+
+    /// The radiance light `light` gives a ray that hits nothing: its `Le` if it is an infinite light, else 0
+    /// (pbrt-v3 `Light::Le`, as `EstimateDirect` asks it of the one light it estimates).
+    #[inline]
+    pub fn le_escaped_by(&self, light: usize, ray: &Ray) -> Spectrum {
+        match self.entries.get(light).map(|e| &e.kind) {
+            Some(Kind::Infinite(i)) => self.infinite.get(*i as usize).map_or(Spectrum::ZERO, |l| l.le(ray.d)),
+            _ => Spectrum::ZERO,
         }
     }
 

@@ -177,7 +177,8 @@ impl Textures {
             return i;
         }
         let (mipmap, err) = imagemap::load(&key);
-        if let Some(e) = err {
+        // A file that does not exist was reported when the scene was loaded.
+        if let Some(e) = err.filter(|_| std::path::Path::new(path).is_file()) {
             w.at(
                 &tex.loc,
                 format!(

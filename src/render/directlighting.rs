@@ -1,0 +1,163 @@
+//! STAGE 6 (render): pbrt-v3's `directlighting` integrator — emitted radiance of the surface seen, direct
+//! lighting from every light (`strategy "all"`, each light's `nsamples`) or from one light chosen uniformly
+//! (`"one"`), and perfect specular reflection and transmission followed up to `maxdepth`.
+//!
+//! A per-pixel reference for the cache applications; depends on `scene`, `shading` and the estimators in
+//! `render::lighting`.
+
+use crate::error::{Error, Result, Warnings};
+use crate::scene::Scene;
+use crate::scene::ray::Ray;
+use crate::scene::sampler::SamplerSpec;
+use crate::shading::Spectrum;
+use crate::shading::bxdf::BxdfFlags;
+use crate::shading::light::LightSelect;
+
+use super::lighting::{ShadePoint, Shading, sample_all_lights, sample_one_light};
+use super::params::IntegratorParams;
+use super::samples::PixelSamples;
+use super::{PixelIntegrator, RayCounters};
+
+/// Most surfaces without a material a ray passes through before it gives up.
+const MAX_PASS_THROUGH: usize = 1024;
+
+/// Largest `maxdepth` accepted (each level may double the rays of a glass path).
+pub const MAX_DEPTH: i64 = 64;
+
+/// How lights are sampled at each shading point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Strategy {
+    /// Every light, with its `nsamples` samples.
+    All,
+    /// One light chosen uniformly.
+    One,
+}
+
+/// pbrt-v3's `directlighting` integrator.
+///
+/// | parameter | type | default | meaning |
+/// |---|---|---|---|
+/// | `strategy` | string | all | `all`: every light with its nsamples; `one`: one light chosen uniformly |
+/// | `maxdepth` | integer | 5 | specular bounces followed |
+pub struct DirectLighting<'a> {
+    shading: Shading<'a>,
+    strategy: Strategy,
+    max_depth: u32,
+    /// Samples per light (rounded as the sampler rounds arrays).
+    counts: Vec<u32>,
+    uniform: LightSelect,
+}
+
+impl<'a> DirectLighting<'a> {
+    /// Reads the parameters and prepares the scene's shading data.
+    pub fn from_params(
+        p: &IntegratorParams<'_>,
+        scene: &'a Scene,
+        sampler: &SamplerSpec,
+        quick: bool,
+        warnings: &mut Warnings,
+    ) -> Result<Self> {
+        let max_depth = read_max_depth(p, "directlighting")?;
+        let strategy = match p.string_or("strategy", "all")?.as_str() {
+            "all" => Strategy::All,
+            "one" => Strategy::One,
+            other => {
+                // pbrt-v3 warns and uses "all".
+                warnings.general(format!(
+                    "{}directlighting: unknown strategy \"{other}\"; using \"all\"",
+                    p.at("strategy")
+                ));
+                Strategy::All
+            }
+        };
+        let shading = Shading::build(scene, false, warnings)?;
+        let counts = (0..shading.lights.len())
+            .map(|j| if quick { 1 } else { sampler.round_count(shading.lights.samples(j)) })
+            .collect();
+        let uniform = LightSelect::new(&shading.lights, "uniform").map_err(Error::usage)?;
+        Ok(DirectLighting { shading, strategy, max_depth, counts, uniform })
+    }
+
+    fn radiance(
+        &self,
+        scene: &Scene,
+        mut ray: Ray,
+        depth: u32,
+        s: &mut PixelSamples,
+        scratch: &mut Vec<[f32; 2]>,
+        c: &mut RayCounters,
+    ) -> Spectrum {
+        let sh = &self.shading;
+        for _ in 0..MAX_PASS_THROUGH {
+            c.camera += 1;
+            let Some(si) = scene.geometry.intersect(&ray) else { return sh.lights.le_escaped(&ray) };
+            let Some(bsdf) = sh.bsdf(&si) else {
+                ray = si.spawn_ray(ray.d);
+                continue;
+            };
+            let wo = -ray.d;
+            let x = ShadePoint { si: &si, bsdf: &bsdf, wo };
+            let mut l = sh.lights.emitted(&si, wo);
+            if !sh.lights.is_empty() {
+                l += match self.strategy {
+                    Strategy::All => sample_all_lights(scene, sh, &x, &self.counts, s, scratch, c),
+                    Strategy::One => sample_one_light(scene, sh, |u| self.uniform.sample(u), &x, s, c),
+                };
+            }
+            if depth + 1 < self.max_depth {
+                for lobe in [BxdfFlags::REFLECTION, BxdfFlags::TRANSMISSION] {
+                    l += self.specular(scene, &x, lobe, depth, s, scratch, c);
+                }
+            }
+            return l;
+        }
+        Spectrum::ZERO
+    }
+
+    /// pbrt-v3 `SpecularReflect` / `SpecularTransmit`: follows the perfectly specular lobe of kind `lobe`.
+    #[allow(clippy::too_many_arguments)]
+    fn specular(
+        &self,
+        scene: &Scene,
+        x: &ShadePoint<'_>,
+        lobe: BxdfFlags,
+        depth: u32,
+        s: &mut PixelSamples,
+        scratch: &mut Vec<[f32; 2]>,
+        c: &mut RayCounters,
+    ) -> Spectrum {
+        let u = s.get2d();
+        let Some(bs) = x.bsdf.sample_f(x.wo, u, lobe | BxdfFlags::SPECULAR) else { return Spectrum::ZERO };
+        let cos = bs.wi.dot(x.bsdf.shading_normal()).abs();
+        if bs.pdf <= 0.0 || bs.f == Spectrum::ZERO || cos == 0.0 {
+            return Spectrum::ZERO;
+        }
+        let li = self.radiance(scene, x.si.spawn_ray(bs.wi), depth + 1, s, scratch, c);
+        bs.f * li * cos / bs.pdf
+    }
+}
+
+/// Reads `maxdepth` (default 5) and checks its range.
+pub fn read_max_depth(p: &IntegratorParams<'_>, integrator: &str) -> Result<u32> {
+    let d = p.int_or("maxdepth", 5)?;
+    if !(0..=MAX_DEPTH).contains(&d) {
+        return Err(Error::usage(format!(
+            "{}{integrator}: \"maxdepth\" must be between 0 and {MAX_DEPTH}, got {d}",
+            p.at("maxdepth")
+        )));
+    }
+    Ok(d as u32)
+}
+
+impl PixelIntegrator for DirectLighting<'_> {
+    fn li(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        s: &mut PixelSamples,
+        scratch: &mut Vec<[f32; 2]>,
+        c: &mut RayCounters,
+    ) -> [f32; 3] {
+        self.radiance(scene, ray, 0, s, scratch, c).to_array()
+    }
+}

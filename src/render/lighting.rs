@@ -1,0 +1,196 @@
+//! STAGE 6 (render): the shading data of a scene made ready for rendering (materials compiled, texture
+//! images loaded, lights built) and pbrt-v3's direct-lighting estimators over it — `EstimateDirect` with
+//! multiple importance sampling (power heuristic, β = 2), `UniformSampleAllLights` and
+//! `UniformSampleOneLight` — shared by the `directlighting` and `path` integrators (and, later, by the
+//! cache applications that shade real surfaces).
+//!
+//! Depends on `scene` and `shading`; knows nothing of placement or caches.
+
+use glam::Vec3A;
+
+use crate::error::{Result, Warnings};
+use crate::scene::Scene;
+use crate::scene::geometry::SurfaceInteraction;
+use crate::shading::Spectrum;
+use crate::shading::bsdf::Bsdf;
+use crate::shading::bxdf::BxdfFlags;
+use crate::shading::light::Lights;
+use crate::shading::material::Materials;
+use crate::shading::texture::Textures;
+
+use super::RayCounters;
+use super::samples::PixelSamples;
+
+/// Materials, textures and lights of one scene, ready to shade with.
+pub struct Shading<'a> {
+    /// Compiled materials.
+    pub materials: Materials,
+    /// Textures with their images.
+    pub textures: Textures,
+    /// Light sources (one per emitting triangle, as in pbrt-v3).
+    pub lights: Lights<'a>,
+    /// pbrt-v3's `allowMultipleLobes` (true for `path`: smooth glass is one `FresnelSpecular` lobe; false
+    /// for `directlighting`, whose specular-bounce code samples reflection and transmission separately).
+    pub multiple_lobes: bool,
+}
+
+impl<'a> Shading<'a> {
+    /// Prepares the shading data of `scene`; a scene without lights gets a warning (its image is black
+    /// except for nothing at all — pbrt-v3 renders it black too).
+    pub fn build(scene: &'a Scene, multiple_lobes: bool, warnings: &mut Warnings) -> Result<Shading<'a>> {
+        let textures = Textures::build(scene, warnings)?;
+        let materials = Materials::build(scene, warnings)?;
+        let lights = Lights::build(scene, warnings)?;
+        if lights.is_empty() {
+            warnings.general("the scene has no light sources; the image will be black".to_string());
+        }
+        Ok(Shading { materials, textures, lights, multiple_lobes })
+    }
+
+    /// The BSDF at a hit (`None` for a surface without material, which rays pass through).
+    #[inline]
+    pub fn bsdf(&self, si: &SurfaceInteraction) -> Option<Bsdf> {
+        self.materials.bsdf_with(si.material, si, &self.textures, self.multiple_lobes)
+    }
+}
+
+/// pbrt-v3's power heuristic with β = 2, one sample per technique.
+#[inline]
+pub fn power_heuristic(f_pdf: f32, g_pdf: f32) -> f32 {
+    let (f, g) = (f_pdf * f_pdf, g_pdf * g_pdf);
+    if f.is_infinite() {
+        return 1.0;
+    }
+    if f + g == 0.0 { 0.0 } else { f / (f + g) }
+}
+
+/// Everything the estimators need about the point being shaded.
+pub struct ShadePoint<'a> {
+    /// The surface interaction.
+    pub si: &'a SurfaceInteraction,
+    /// Its BSDF.
+    pub bsdf: &'a Bsdf,
+    /// Direction toward the viewer (−ray.d).
+    pub wo: Vec3A,
+}
+
+/// Radiance reflected at `x` from light `light` by one light sample and one BSDF sample combined with the
+/// power heuristic (pbrt-v3 `EstimateDirect`, specular lobes excluded, no participating media).
+pub fn estimate_direct(
+    scene: &Scene,
+    sh: &Shading<'_>,
+    x: &ShadePoint<'_>,
+    light: usize,
+    u_light: [f32; 2],
+    u_scatter: [f32; 2],
+    c: &mut RayCounters,
+) -> Spectrum {
+    let flags = BxdfFlags::NON_SPECULAR;
+    let ns = x.bsdf.shading_normal();
+    let delta = sh.lights.is_delta(light);
+    let mut ld = Spectrum::ZERO;
+    if let Some(ls) = sh.lights.sample_li(light, x.si, u_light)
+        && ls.pdf > 0.0
+        && ls.li != Spectrum::ZERO
+    {
+        let f = x.bsdf.f(x.wo, ls.wi, flags) * ls.wi.dot(ns).abs();
+        if f != Spectrum::ZERO {
+            c.shadow += 1;
+            if !scene.geometry.occluded_from(&ls.shadow, x.si.origin) {
+                if delta {
+                    ld += f * ls.li / ls.pdf;
+                } else {
+                    let scatter_pdf = x.bsdf.pdf(x.wo, ls.wi, flags);
+                    ld += f * ls.li * power_heuristic(ls.pdf, scatter_pdf) / ls.pdf;
+                }
+            }
+        }
+    }
+    if delta {
+        return ld;
+    }
+    let Some(bs) = x.bsdf.sample_f(x.wo, u_scatter, flags) else { return ld };
+    let f = bs.f * bs.wi.dot(ns).abs();
+    if f == Spectrum::ZERO || bs.pdf <= 0.0 {
+        return ld;
+    }
+    let sampled_specular = bs.sampled.contains(BxdfFlags::SPECULAR);
+    let ray = x.si.spawn_ray(bs.wi);
+    c.camera += 1;
+    let li = match scene.geometry.intersect(&ray) {
+        Some(hit) => {
+            if sh.lights.light_of_hit(&hit) != Some(light) {
+                return ld;
+            }
+            let weight = if sampled_specular {
+                1.0
+            } else {
+                let light_pdf = sh.lights.pdf_li_hit(light, x.si, &hit);
+                if light_pdf == 0.0 {
+                    return ld;
+                }
+                power_heuristic(bs.pdf, light_pdf)
+            };
+            sh.lights.emitted(&hit, -bs.wi) * weight
+        }
+        None => {
+            let weight = if sampled_specular {
+                1.0
+            } else {
+                let light_pdf = sh.lights.pdf_li(light, x.si, bs.wi);
+                if light_pdf == 0.0 {
+                    return ld;
+                }
+                power_heuristic(bs.pdf, light_pdf)
+            };
+            sh.lights.le_escaped_by(light, &ray) * weight
+        }
+    };
+    ld + f * li / bs.pdf
+}
+
+/// pbrt-v3 `UniformSampleAllLights`: every light, with `counts[j]` samples each (arrays of the sampler).
+pub fn sample_all_lights(
+    scene: &Scene,
+    sh: &Shading<'_>,
+    x: &ShadePoint<'_>,
+    counts: &[u32],
+    s: &mut PixelSamples,
+    scratch: &mut Vec<[f32; 2]>,
+    c: &mut RayCounters,
+) -> Spectrum {
+    let mut l = Spectrum::ZERO;
+    for (j, &n) in counts.iter().enumerate() {
+        let n = n as usize;
+        scratch.resize(2 * n, [0.0; 2]);
+        let (u_light, u_scatter) = scratch.split_at_mut(n);
+        s.array2d(u_light);
+        s.array2d(u_scatter);
+        let mut ld = Spectrum::ZERO;
+        for k in 0..n {
+            ld += estimate_direct(scene, sh, x, j, u_light[k], u_scatter[k], c);
+        }
+        l += ld / n as f32;
+    }
+    l
+}
+
+/// pbrt-v3 `UniformSampleOneLight`: one light chosen by `choose` (a sample in [0, 1) → the light and its
+/// probability), its estimate divided by that probability.
+pub fn sample_one_light(
+    scene: &Scene,
+    sh: &Shading<'_>,
+    choose: impl Fn(f32) -> Option<(usize, f32)>,
+    x: &ShadePoint<'_>,
+    s: &mut PixelSamples,
+    c: &mut RayCounters,
+) -> Spectrum {
+    let u = s.get2d();
+    let Some((light, pmf)) = choose(u[0]) else { return Spectrum::ZERO };
+    if pmf == 0.0 {
+        return Spectrum::ZERO;
+    }
+    let u_light = s.get2d();
+    let u_scatter = s.get2d();
+    estimate_direct(scene, sh, x, light, u_light, u_scatter, c) / pmf
+}

@@ -1,0 +1,161 @@
+//! STAGE 5 (shading): pbrt-v3's `"spatial"` light sample distribution (core/lightdistrib.cpp), the default of
+//! its `path` integrator: the scene bounds are cut into a voxel grid (64 voxels along the longest side), and
+//! each voxel gets, the first time a path asks for it, a distribution over the lights proportional to the
+//! luminance each light delivers to 128 points of the voxel (Halton points, one light sample each, no
+//! visibility), with a floor of 0.1 % of the average so that no light has probability 0.
+//!
+//! The points and light samples are fixed (radical inverses), so a voxel's distribution does not depend on
+//! which thread builds it first: images stay identical for any thread count. Depends only on
+//! [`super::Lights`] and [`super::distribution`].
+
+use std::sync::OnceLock;
+
+use glam::Vec3A;
+
+use crate::scene::accel::{PrimOrigin, PrimRef};
+use crate::scene::geometry::SurfaceInteraction;
+
+use super::Lights;
+use super::distribution::Distribution1D;
+use super::envmap::luminance;
+
+/// Voxels along the longest side of the scene bounds (pbrt-v3's `maxVoxels`).
+const MAX_VOXELS: f32 = 64.0;
+/// Points per voxel at which the lights are evaluated (pbrt-v3's `nSamples`).
+const SAMPLES: u32 = 128;
+/// Largest number of voxels kept (a degenerate flat scene gives far fewer; this bounds memory).
+const MAX_CELLS: usize = 64 * 64 * 64;
+
+/// Light selection probabilities that depend on where the shading point is.
+#[derive(Debug)]
+pub struct SpatialSelect {
+    lo: Vec3A,
+    extent: Vec3A,
+    n: [usize; 3],
+    cells: Vec<OnceLock<Distribution1D>>,
+}
+
+impl SpatialSelect {
+    /// The grid over the world bounds `(lo, hi)` (`None`: an empty world, one voxel).
+    pub fn new(bounds: Option<(Vec3A, Vec3A)>) -> SpatialSelect {
+        let (lo, hi) = bounds.unwrap_or((Vec3A::ZERO, Vec3A::ZERO));
+        let extent = (hi - lo).max(Vec3A::ZERO);
+        let longest = extent.max_element();
+        let mut n = [1usize; 3];
+        if longest > 0.0 && longest.is_finite() {
+            for (k, nk) in n.iter_mut().enumerate() {
+                *nk = ((extent[k] / longest * MAX_VOXELS).round() as usize).max(1);
+            }
+        }
+        let count = (n[0] * n[1] * n[2]).min(MAX_CELLS);
+        SpatialSelect { lo, extent, n, cells: (0..count).map(|_| OnceLock::new()).collect() }
+    }
+
+    /// The voxel holding `p` (clamped into the grid).
+    fn cell(&self, p: Vec3A) -> [usize; 3] {
+        let mut v = [0usize; 3];
+        for k in 0..3 {
+            let t = if self.extent[k] > 0.0 { (p[k] - self.lo[k]) / self.extent[k] } else { 0.0 };
+            let i = (t * self.n[k] as f32) as i64; // NaN → 0
+            v[k] = i.clamp(0, self.n[k] as i64 - 1) as usize;
+        }
+        v
+    }
+
+    fn distribution(&self, lights: &Lights<'_>, p: Vec3A) -> &Distribution1D {
+        let v = self.cell(p);
+        let index = ((v[2] * self.n[1] + v[1]) * self.n[0] + v[0]).min(self.cells.len() - 1);
+        self.cells[index].get_or_init(|| self.compute(lights, v))
+    }
+
+    /// pbrt-v3's `SpatialLightDistribution::ComputeDistribution` for voxel `v`.
+    fn compute(&self, lights: &Lights<'_>, v: [usize; 3]) -> Distribution1D {
+        let size = Vec3A::new(
+            self.extent.x / self.n[0] as f32,
+            self.extent.y / self.n[1] as f32,
+            self.extent.z / self.n[2] as f32,
+        );
+        let p0 = self.lo + Vec3A::new(v[0] as f32, v[1] as f32, v[2] as f32) * size;
+        let mut contrib = vec![0.0f32; lights.len()];
+        for i in 0..SAMPLES {
+            let t = Vec3A::new(radical_inverse(2, i), radical_inverse(3, i), radical_inverse(5, i));
+            let at = point_interaction(p0 + t * size);
+            let u = [radical_inverse(7, i), radical_inverse(11, i)];
+            for (j, c) in contrib.iter_mut().enumerate() {
+                if let Some(ls) = lights.sample_li(j, &at, u)
+                    && ls.pdf > 0.0
+                {
+                    let y = luminance(ls.li) / ls.pdf;
+                    if y.is_finite() {
+                        *c += y;
+                    }
+                }
+            }
+        }
+        let sum: f32 = contrib.iter().sum();
+        let avg = sum / (SAMPLES as f32 * contrib.len().max(1) as f32);
+        let floor = if avg > 0.0 { 0.001 * avg } else { 1.0 };
+        contrib.iter_mut().for_each(|c| *c = c.max(floor));
+        Distribution1D::new(&contrib)
+    }
+
+    /// Picks a light for a point at `p` with `u` ∈ [0, 1): its index and probability.
+    #[inline]
+    pub fn sample(&self, lights: &Lights<'_>, p: Vec3A, u: f32) -> Option<(usize, f32)> {
+        if lights.is_empty() {
+            return None;
+        }
+        let (i, pmf) = self.distribution(lights, p).sample_discrete(u);
+        (pmf > 0.0).then_some((i, pmf))
+    }
+}
+
+/// A bare point (no surface: zero normals), as pbrt-v3's `Interaction` at a voxel sample point.
+fn point_interaction(p: Vec3A) -> SurfaceInteraction {
+    SurfaceInteraction {
+        p,
+        p_error: Vec3A::ZERO,
+        t: 0.0,
+        ng: Vec3A::ZERO,
+        ns: Vec3A::ZERO,
+        dpdu: Vec3A::X,
+        uv: [0.0; 2],
+        material: 0,
+        area_light: None,
+        origin: PrimOrigin { prim: PrimRef::Quadric(u32::MAX), instance: None },
+    }
+}
+
+/// The radical inverse of `i` in prime `base` (the Halton sequence's dimension for that base).
+fn radical_inverse(base: u32, mut i: u32) -> f32 {
+    let inv = 1.0 / base as f64;
+    let (mut digits, mut scale) = (0.0f64, inv);
+    while i > 0 {
+        digits += (i % base) as f64 * scale;
+        i /= base;
+        scale *= inv;
+    }
+    (digits as f32).min(1.0 - f32::EPSILON / 2.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn radical_inverses_are_the_halton_points() {
+        assert_eq!(radical_inverse(2, 1), 0.5);
+        assert_eq!(radical_inverse(2, 3), 0.75);
+        assert!((radical_inverse(3, 1) - 1.0 / 3.0).abs() < 1e-7);
+        assert!((radical_inverse(5, 7) - (2.0 / 5.0 + 1.0 / 25.0)).abs() < 1e-7);
+    }
+
+    #[test]
+    fn the_grid_follows_the_bounds_aspect_and_clamps_points() {
+        let s = SpatialSelect::new(Some((Vec3A::ZERO, Vec3A::new(2.0, 1.0, 0.0))));
+        assert_eq!(s.n, [64, 32, 1]);
+        assert_eq!(s.cell(Vec3A::new(-5.0, 0.5, 3.0)), [0, 16, 0]);
+        assert_eq!(s.cell(Vec3A::new(9.0, f32::NAN, 0.0)), [63, 0, 0]);
+        assert_eq!(SpatialSelect::new(None).cells.len(), 1);
+    }
+}
