@@ -377,13 +377,31 @@ impl Accel {
     }
 
     fn nearest(&self, level: &Level, ray: &Ray) -> Option<Hit> {
+        #[cfg(target_arch = "x86_64")]
+        if has_avx2() {
+            // SAFETY: the CPU supports AVX2.
+            return unsafe { self.nearest_avx2(level, ray) };
+        }
+        self.nearest_impl::<false>(level, ray)
+    }
+
+    /// [`Accel::nearest`] compiled with AVX2 enabled (the node test visits exactly the nodes the SSE2 one
+    /// does, so hits do not depend on the CPU).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn nearest_avx2(&self, level: &Level, ray: &Ray) -> Option<Hit> {
+        self.nearest_impl::<true>(level, ray)
+    }
+
+    #[inline(always)]
+    fn nearest_impl<const WIDE: bool>(&self, level: &Level, ray: &Ray) -> Option<Hit> {
         let bvh = level.bvh.as_ref()?;
         let shear = RayShear::new(ray.o, ray.d);
         let mut tr = TravRay::new(ray.o, ray.d, ray.t_max);
         let mut best: Option<Hit> = None;
         let mut state = bvh.new_traversal(ray.d);
         let mut node;
-        obvhs::traverse!(bvh, node, state, intersect_node::<false>(node, &tr, state.oct_inv4), {
+        obvhs::traverse!(bvh, node, state, intersect_node::<WIDE>(node, &tr, state.oct_inv4), {
             let it = &level.items[state.primitive_id as usize];
             let r = Ray { t_max: tr.t_max, ..*ray };
             let found = match it.r {
