@@ -20,7 +20,7 @@ use crate::scene::shapes::quadric::{Quadric, transform_bounds};
 use crate::scene::shapes::triangle::{self, RayShear};
 
 mod traverse;
-use traverse::{TravRay, has_avx2, intersect_node};
+use traverse::{TravRay, Traversal, has_avx2, intersect_node};
 
 /// The largest coordinate (in absolute value) that geometry may reach. Found by fuzzing: obvhs's BVH
 /// build works with box surface areas times primitive counts in f32, which overflow near 1e19 (its CWBVH
@@ -311,7 +311,7 @@ impl Accel {
 
     /// Whether anything blocks `ray` for t in (0, ray.t_max).
     pub fn occluded(&self, ray: &Ray) -> bool {
-        self.any(&self.top, ray, None).is_some()
+        self.any(&self.top, ray, &RayShear::new(ray.o, ray.d), None).is_some()
     }
 
     /// [`Accel::occluded`] for a ray leaving the surface `from`: that triangle is not tested (it cannot
@@ -322,12 +322,15 @@ impl Accel {
 
     /// [`Accel::occluded`] for a ray leaving `from` (if given), first testing the blocker remembered in
     /// `hint` and remembering the new one. The answer is the same as [`Accel::occluded`]'s.
+    #[inline]
     pub fn occluded_hinted(&self, ray: &Ray, from: Option<PrimOrigin>, hint: &mut OccluderHint) -> bool {
-        if hint.top != 0 && self.hint_blocks(ray, *hint) {
+        // One shear for the hint test and the traversal.
+        let shear = RayShear::new(ray.o, ray.d);
+        if hint.top != 0 && self.hint_blocks(ray, &shear, *hint) {
             return true;
         }
         let skip = Self::skip_for(from);
-        match self.any(&self.top, ray, Some(&skip)) {
+        match self.any(&self.top, ray, &shear, Some(&skip)) {
             Some((top, inner)) => {
                 *hint = OccluderHint { top: top + 1, inner };
                 true
@@ -336,7 +339,10 @@ impl Accel {
         }
     }
 
-    fn hint_blocks(&self, ray: &Ray, hint: OccluderHint) -> bool {
+    /// Whether the remembered blocker `hint` blocks `ray` (whose shear is `shear`). A hint is only ever set
+    /// from a traversal that left out the surface the ray leaves, so it is never that surface.
+    #[inline]
+    fn hint_blocks(&self, ray: &Ray, shear: &RayShear, hint: OccluderHint) -> bool {
         let Some(it) = self.top.items.get(hint.top as usize - 1) else { return false };
         match it.r {
             PrimRef::Instance(i) => {
@@ -347,7 +353,7 @@ impl Accel {
                 let local = inst.local_ray(ray, ray.t_max);
                 self.item_blocks(inner, &local, &RayShear::new(local.o, local.d))
             }
-            _ => self.item_blocks(it, ray, &RayShear::new(ray.o, ray.d)),
+            _ => self.item_blocks(it, ray, shear),
         }
     }
 
@@ -399,7 +405,7 @@ impl Accel {
         let shear = RayShear::new(ray.o, ray.d);
         let mut tr = TravRay::new(ray.o, ray.d, ray.t_max);
         let mut best: Option<Hit> = None;
-        let mut state = bvh.new_traversal(ray.d);
+        let mut state = Traversal::new(bvh, ray.d);
         let mut node;
         obvhs::traverse!(bvh, node, state, intersect_node::<WIDE>(node, &tr, state.oct_inv4), {
             let it = &level.items[state.primitive_id as usize];
@@ -446,30 +452,36 @@ impl Accel {
         best
     }
 
-    /// The slot of a primitive of `level` blocking `ray` (and, for an instance, the slot inside it).
-    fn any(&self, level: &Level, ray: &Ray, skip: Option<&Skip>) -> Option<(u32, u32)> {
+    /// The slot of a primitive of `level` blocking `ray` (and, for an instance, the slot inside it); `shear`
+    /// is the ray's, made once for the hint tests and the traversal.
+    fn any(&self, level: &Level, ray: &Ray, shear: &RayShear, skip: Option<&Skip>) -> Option<(u32, u32)> {
         #[cfg(target_arch = "x86_64")]
         if has_avx2() {
             // SAFETY: the CPU supports AVX2.
-            return unsafe { self.any_avx2(level, ray, skip) };
+            return unsafe { self.any_avx2(level, ray, shear, skip) };
         }
-        self.any_impl::<false>(level, ray, skip)
+        self.any_impl::<false>(level, ray, shear, skip)
     }
 
     /// [`Accel::any`] compiled with AVX2 enabled, so the 8-wide node test inlines into the traversal loop.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn any_avx2(&self, level: &Level, ray: &Ray, skip: Option<&Skip>) -> Option<(u32, u32)> {
-        self.any_impl::<true>(level, ray, skip)
+    unsafe fn any_avx2(&self, level: &Level, ray: &Ray, shear: &RayShear, skip: Option<&Skip>) -> Option<(u32, u32)> {
+        self.any_impl::<true>(level, ray, shear, skip)
     }
 
     #[inline(always)]
-    fn any_impl<const WIDE: bool>(&self, level: &Level, ray: &Ray, skip: Option<&Skip>) -> Option<(u32, u32)> {
+    fn any_impl<const WIDE: bool>(
+        &self,
+        level: &Level,
+        ray: &Ray,
+        shear: &RayShear,
+        skip: Option<&Skip>,
+    ) -> Option<(u32, u32)> {
         let bvh = level.bvh.as_ref()?;
-        let shear = RayShear::new(ray.o, ray.d);
         let tr = TravRay::new(ray.o, ray.d, ray.t_max);
         let mut found = None;
-        let mut state = bvh.new_traversal(ray.d);
+        let mut state = Traversal::new(bvh, ray.d);
         let mut node;
         'search: {
             obvhs::traverse!(bvh, node, state, intersect_node::<WIDE>(node, &tr, state.oct_inv4), {
@@ -486,10 +498,11 @@ impl Accel {
                             .and_then(|k| k.inner)
                             .filter(|(j, _)| *j == i)
                             .map(|(_, p)| Skip { top: Some(p), inner: None });
-                        self.any(&self.objects[inst.object as usize], &local, inner_skip.as_ref())
+                        let local_shear = RayShear::new(local.o, local.d);
+                        self.any(&self.objects[inst.object as usize], &local, &local_shear, inner_skip.as_ref())
                             .map(|(inner, _)| inner)
                     }
-                    _ => self.item_blocks(it, ray, &shear).then_some(u32::MAX),
+                    _ => self.item_blocks(it, ray, shear).then_some(u32::MAX),
                 };
                 if let Some(inner) = blocked {
                     found = Some((slot, inner));
