@@ -19,7 +19,10 @@ use crate::scene::shapes::curve::{Curve, CurveSegment};
 use crate::scene::shapes::quadric::{Quadric, transform_bounds};
 use crate::scene::shapes::triangle::{self, RayShear};
 
+mod occluder_cache;
 mod traverse;
+pub use occluder_cache::OccluderCache;
+use occluder_cache::direction_cell;
 use traverse::{TravRay, Traversal, has_avx2, intersect_node};
 
 /// The largest coordinate (in absolute value) that geometry may reach. Found by fuzzing: obvhs's BVH
@@ -336,6 +339,63 @@ impl Accel {
                 true
             }
             None => false,
+        }
+    }
+
+    /// [`Accel::occluded_hinted`] that also tries the blocker `cache` remembers for the ray's direction (from
+    /// earlier points) before traversing, and remembers the one found. The answer is the same as
+    /// [`Accel::occluded`]'s whatever `hint` and `cache` hold, so a cache may be kept across points and images.
+    #[inline]
+    pub fn occluded_cached(
+        &self,
+        ray: &Ray,
+        from: Option<PrimOrigin>,
+        hint: &mut OccluderHint,
+        cache: &mut OccluderCache,
+    ) -> bool {
+        let shear = RayShear::new(ray.o, ray.d);
+        if hint.top != 0 && self.hint_blocks(ray, &shear, *hint) {
+            return true;
+        }
+        let skip = Self::skip_for(from);
+        // While the cache is off (its guesses rarely pay), it is neither asked nor filled.
+        let on = cache.worth_trying();
+        let cell = if on { direction_cell(ray.d) } else { 0 };
+        if on {
+            let guess = cache.guess(cell);
+            if guess.top != 0 && guess != *hint {
+                // A guess from another point may be this ray's own surface: never test what `skip` leaves out.
+                let hit = !self.is_skipped(guess, &skip) && self.hint_blocks(ray, &shear, guess);
+                cache.record(hit);
+                if hit {
+                    *hint = guess;
+                    return true;
+                }
+            }
+        }
+        match self.any(&self.top, ray, &shear, Some(&skip)) {
+            Some((top, inner)) => {
+                *hint = OccluderHint { top: top + 1, inner };
+                if on {
+                    cache.remember(cell, *hint);
+                }
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Whether the blocker `b` is a primitive that `skip` leaves out.
+    #[inline]
+    fn is_skipped(&self, b: OccluderHint, skip: &Skip) -> bool {
+        let Some(it) = self.top.items.get(b.top as usize - 1) else { return false };
+        match it.r {
+            PrimRef::Instance(i) => {
+                let object = self.instances[i as usize].object;
+                let inner = self.objects[object as usize].items.get(b.inner as usize);
+                inner.is_some_and(|inner| skip.inner == Some((i, inner.r)))
+            }
+            r => skip.top == Some(r),
         }
     }
 
