@@ -399,8 +399,9 @@ impl Accel {
         }
     }
 
-    /// Whether the remembered blocker `hint` blocks `ray` (whose shear is `shear`). A hint is only ever set
-    /// from a traversal that left out the surface the ray leaves, so it is never that surface.
+    /// Whether the remembered blocker `hint` blocks `ray` (whose shear is `shear`). A point's hint is only
+    /// ever set from a traversal that left out the surface its rays leave, or from a cache guess checked with
+    /// [`Accel::is_skipped`], so it is never that surface.
     #[inline]
     fn hint_blocks(&self, ray: &Ray, shear: &RayShear, hint: OccluderHint) -> bool {
         let Some(it) = self.top.items.get(hint.top as usize - 1) else { return false };
