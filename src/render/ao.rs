@@ -13,7 +13,7 @@ use crate::sampling::warp::{
     UNIFORM_HEMISPHERE_PDF, cosine_hemisphere_batch, cosine_hemisphere_pdf, uniform_hemisphere,
 };
 use crate::scene::Scene;
-use crate::scene::accel::OccluderHint;
+use crate::scene::accel::{OccluderCache, OccluderHint};
 use crate::scene::ray::{Ray, offset_ray_origin};
 use crate::scene::sampler::SamplerSpec;
 
@@ -79,11 +79,25 @@ impl AmbientOcclusion {
         u: &[[f32; 2]],
         counters: &mut RayCounters,
     ) -> f32 {
+        OCCLUDERS.with_borrow_mut(|cache| self.occlusion_cached(scene, si, ray_dir, u, cache, counters))
+    }
+
+    /// [`AmbientOcclusion::occlusion`] with the caller's cache of blockers remembered by direction (see
+    /// [`OccluderCache`]; the result never depends on what it holds).
+    pub fn occlusion_cached(
+        &self,
+        scene: &Scene,
+        si: &crate::scene::geometry::SurfaceInteraction,
+        ray_dir: Vec3A,
+        u: &[[f32; 2]],
+        cache: &mut OccluderCache,
+        counters: &mut RayCounters,
+    ) -> f32 {
         let n = if si.ng.dot(-ray_dir) < 0.0 { -si.ng } else { si.ng };
         let frame = Frame::from_normal(n);
-        let inv_n = 1.0 / u.len() as f32;
         let origins =
             [offset_ray_origin(si.p, si.p_error, si.ng, si.ng), offset_ray_origin(si.p, si.p_error, si.ng, -si.ng)];
+        let inv_n = 1.0 / u.len() as f32;
         let mut l = 0.0;
         let mut hint = OccluderHint::default();
         let mut local = [[0.0f32; 3]; BATCH];
@@ -105,13 +119,20 @@ impl AmbientOcclusion {
                 let o = origins[usize::from(d.dot(si.ng) < 0.0)];
                 let r = Ray { o, d, t_max: self.max_distance };
                 counters.shadow += 1;
-                if !scene.geometry.occluded_hinted(&r, Some(si.origin), &mut hint) {
+                if !scene.geometry.occluded_cached(&r, Some(si.origin), &mut hint, cache) {
                     l += wl.z / pdf * inv_n;
                 }
             }
         }
         l
     }
+}
+
+thread_local! {
+    /// Each worker thread's blockers remembered by direction, kept from point to point and pixel to pixel
+    /// (consecutive camera samples of a thread are neighbours). They only order the work: no answer depends
+    /// on them, so images are the same for any thread count.
+    static OCCLUDERS: std::cell::RefCell<OccluderCache> = const { std::cell::RefCell::new(OccluderCache::new()) };
 }
 
 /// Directions made per batch by [`AmbientOcclusion::occlusion`].

@@ -95,28 +95,39 @@ pub fn coherent_order(points: &mut [[f32; 2]], scratch: &mut OrderScratch) {
         return;
     }
     let k = (n as f64).sqrt().ceil() as usize;
-    let kf = k as f32;
-    let cell = |p: [f32; 2]| {
-        let x = ((p[0] * kf) as usize).min(k - 1);
-        let y = ((p[1] * kf) as usize).min(k - 1);
-        y * k + if y.is_multiple_of(2) { x } else { k - 1 - x }
+    let (kf, last) = (k as f32, (k - 1) as f32);
+    // The cell column (or row) of a coordinate: ⌊v·k⌋ clamped to [0, k-1], NaN → 0. Clamped in float first,
+    // so the conversion cannot overflow and needs none of the saturating cast's checks.
+    let axis = |v: f32| {
+        let c = (v * kf).max(0.0).min(last);
+        // SAFETY: `c` is finite and in [0, k - 1] (max/min drop a NaN operand), so it fits a u32.
+        unsafe { c.to_int_unchecked::<u32>() }
     };
+    let k32 = k as u32;
     let OrderScratch { copy, start } = scratch;
     copy.clear();
-    copy.extend(points.iter().map(|&p| (p, cell(p) as u32)));
+    copy.extend(points.iter().map(|&p| {
+        let (x, y) = (axis(p[0]), axis(p[1]));
+        // Serpentine: odd rows are visited right to left.
+        let col = if y & 1 == 0 { x } else { k32 - 1 - x };
+        (p, y * k32 + col)
+    }));
     start.clear();
     start.resize(k * k + 1, 0);
     for &(_, c) in copy.iter() {
         start[c as usize + 1] += 1;
     }
-    for i in 1..start.len() {
-        start[i] += start[i - 1];
+    let mut sum = 0;
+    for s in start.iter_mut() {
+        sum += *s;
+        *s = sum;
     }
-    // Stable: points sharing a cell keep their order, so the result is a pure function of the input.
-    for &(p, c) in copy.iter() {
-        let slot = &mut start[c as usize];
+    // `start[c + 1]` now ends cell c; fill each cell from its end backwards, walking the points backwards, so
+    // points sharing a cell keep their order (stable: the result is a pure function of the input).
+    for &(p, c) in copy.iter().rev() {
+        let slot = &mut start[c as usize + 1];
+        *slot -= 1;
         points[*slot as usize] = p;
-        *slot += 1;
     }
 }
 
@@ -149,6 +160,31 @@ mod tests {
         after.sort_by(|a, b| a.partial_cmp(b).unwrap());
         assert_eq!(before, after);
         assert!(step(&pts) < random_path / 4.0);
+    }
+
+    #[test]
+    fn coherent_order_is_a_stable_sort_by_serpentine_cell() {
+        // Checked against the plain definition: a stable sort by the cell index ⌊v·k⌋ (clamped), odd rows
+        // reversed. Includes values on and beyond the cell edges, and NaN (cell 0).
+        let mut rng = crate::sampling::Rng::new(7);
+        for n in [4usize, 5, 16, 17, 63, 64, 100, 256, 1000] {
+            let mut pts: Vec<[f32; 2]> = (0..n).map(|_| rng.uniform2()).collect();
+            pts[0] = [0.0, 0.999_999_9];
+            pts[1] = [1.0, 0.5];
+            pts[2] = [f32::NAN, -0.25];
+            pts[3] = [0.25, 0.25];
+            let k = (n as f64).sqrt().ceil() as usize;
+            let cell = |p: &[f32; 2]| {
+                let c = |v: f32| ((v * k as f32) as usize).min(k - 1);
+                let (x, y) = (c(p[0]), c(p[1]));
+                y * k + if y % 2 == 0 { x } else { k - 1 - x }
+            };
+            let mut expect = pts.clone();
+            expect.sort_by_key(cell);
+            coherent_order(&mut pts, &mut OrderScratch::default());
+            let bits = |v: &[[f32; 2]]| v.iter().map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
+            assert_eq!(bits(&pts), bits(&expect), "n = {n}");
+        }
     }
 
     fn spec(kind: SamplerKind, spp: u32) -> SamplerSpec {

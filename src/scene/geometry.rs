@@ -4,7 +4,7 @@
 
 use glam::Vec3A;
 
-use crate::scene::accel::{Accel, Hit, OccluderHint, PrimOrigin, PrimRef};
+use crate::scene::accel::{Accel, Hit, OccluderCache, OccluderHint, PrimOrigin, PrimRef};
 use crate::scene::mesh::TriangleMesh;
 use crate::scene::ray::{Ray, gamma, offset_ray_origin};
 use crate::scene::shapes::curve::CurveHit;
@@ -103,6 +103,19 @@ impl Geometry {
     #[inline]
     pub fn occluded_hinted(&self, ray: &Ray, from: Option<PrimOrigin>, hint: &mut OccluderHint) -> bool {
         self.accel.occluded_hinted(ray, from, hint)
+    }
+
+    /// [`Geometry::occluded_hinted`] that also tries the blocker `cache` remembers for the ray's direction
+    /// (see [`OccluderCache`]; the answer never depends on what `hint` or `cache` hold).
+    #[inline]
+    pub fn occluded_cached(
+        &self,
+        ray: &Ray,
+        from: Option<PrimOrigin>,
+        hint: &mut OccluderHint,
+        cache: &mut OccluderCache,
+    ) -> bool {
+        self.accel.occluded_cached(ray, from, hint, cache)
     }
 
     /// [`Geometry::occluded`] for a ray leaving the surface `from` (which is then not tested).

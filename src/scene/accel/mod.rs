@@ -19,8 +19,11 @@ use crate::scene::shapes::curve::{Curve, CurveSegment};
 use crate::scene::shapes::quadric::{Quadric, transform_bounds};
 use crate::scene::shapes::triangle::{self, RayShear};
 
+mod occluder_cache;
 mod traverse;
-use traverse::{TravRay, has_avx2, intersect_node};
+pub use occluder_cache::OccluderCache;
+use occluder_cache::direction_cell;
+use traverse::{TravRay, Traversal, has_avx2, intersect_node};
 
 /// The largest coordinate (in absolute value) that geometry may reach. Found by fuzzing: obvhs's BVH
 /// build works with box surface areas times primitive counts in f32, which overflow near 1e19 (its CWBVH
@@ -311,7 +314,7 @@ impl Accel {
 
     /// Whether anything blocks `ray` for t in (0, ray.t_max).
     pub fn occluded(&self, ray: &Ray) -> bool {
-        self.any(&self.top, ray, None).is_some()
+        self.any(&self.top, ray, &RayShear::new(ray.o, ray.d), None).is_some()
     }
 
     /// [`Accel::occluded`] for a ray leaving the surface `from`: that triangle is not tested (it cannot
@@ -322,12 +325,15 @@ impl Accel {
 
     /// [`Accel::occluded`] for a ray leaving `from` (if given), first testing the blocker remembered in
     /// `hint` and remembering the new one. The answer is the same as [`Accel::occluded`]'s.
+    #[inline]
     pub fn occluded_hinted(&self, ray: &Ray, from: Option<PrimOrigin>, hint: &mut OccluderHint) -> bool {
-        if hint.top != 0 && self.hint_blocks(ray, *hint) {
+        // One shear for the hint test and the traversal.
+        let shear = RayShear::new(ray.o, ray.d);
+        if hint.top != 0 && self.hint_blocks(ray, &shear, *hint) {
             return true;
         }
         let skip = Self::skip_for(from);
-        match self.any(&self.top, ray, Some(&skip)) {
+        match self.any(&self.top, ray, &shear, Some(&skip)) {
             Some((top, inner)) => {
                 *hint = OccluderHint { top: top + 1, inner };
                 true
@@ -336,7 +342,68 @@ impl Accel {
         }
     }
 
-    fn hint_blocks(&self, ray: &Ray, hint: OccluderHint) -> bool {
+    /// [`Accel::occluded_hinted`] that also tries the blocker `cache` remembers for the ray's direction (from
+    /// earlier points) before traversing, and remembers the one found. The answer is the same as
+    /// [`Accel::occluded`]'s whatever `hint` and `cache` hold, so a cache may be kept across points and images.
+    #[inline]
+    pub fn occluded_cached(
+        &self,
+        ray: &Ray,
+        from: Option<PrimOrigin>,
+        hint: &mut OccluderHint,
+        cache: &mut OccluderCache,
+    ) -> bool {
+        let shear = RayShear::new(ray.o, ray.d);
+        if hint.top != 0 && self.hint_blocks(ray, &shear, *hint) {
+            return true;
+        }
+        let skip = Self::skip_for(from);
+        // While the cache is off (its guesses rarely pay), it is neither asked nor filled.
+        let on = cache.worth_trying();
+        let cell = if on { direction_cell(ray.d) } else { 0 };
+        if on {
+            let guess = cache.guess(cell);
+            if guess.top != 0 && guess != *hint {
+                // A guess from another point may be this ray's own surface: never test what `skip` leaves out.
+                let hit = !self.is_skipped(guess, &skip) && self.hint_blocks(ray, &shear, guess);
+                cache.record(hit);
+                if hit {
+                    *hint = guess;
+                    return true;
+                }
+            }
+        }
+        match self.any(&self.top, ray, &shear, Some(&skip)) {
+            Some((top, inner)) => {
+                *hint = OccluderHint { top: top + 1, inner };
+                if on {
+                    cache.remember(cell, *hint);
+                }
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Whether the blocker `b` is a primitive that `skip` leaves out.
+    #[inline]
+    fn is_skipped(&self, b: OccluderHint, skip: &Skip) -> bool {
+        let Some(it) = self.top.items.get(b.top as usize - 1) else { return false };
+        match it.r {
+            PrimRef::Instance(i) => {
+                let object = self.instances[i as usize].object;
+                let inner = self.objects[object as usize].items.get(b.inner as usize);
+                inner.is_some_and(|inner| skip.inner == Some((i, inner.r)))
+            }
+            r => skip.top == Some(r),
+        }
+    }
+
+    /// Whether the remembered blocker `hint` blocks `ray` (whose shear is `shear`). A point's hint is only
+    /// ever set from a traversal that left out the surface its rays leave, or from a cache guess checked with
+    /// [`Accel::is_skipped`], so it is never that surface.
+    #[inline]
+    fn hint_blocks(&self, ray: &Ray, shear: &RayShear, hint: OccluderHint) -> bool {
         let Some(it) = self.top.items.get(hint.top as usize - 1) else { return false };
         match it.r {
             PrimRef::Instance(i) => {
@@ -347,7 +414,7 @@ impl Accel {
                 let local = inst.local_ray(ray, ray.t_max);
                 self.item_blocks(inner, &local, &RayShear::new(local.o, local.d))
             }
-            _ => self.item_blocks(it, ray, &RayShear::new(ray.o, ray.d)),
+            _ => self.item_blocks(it, ray, shear),
         }
     }
 
@@ -377,13 +444,31 @@ impl Accel {
     }
 
     fn nearest(&self, level: &Level, ray: &Ray) -> Option<Hit> {
+        #[cfg(target_arch = "x86_64")]
+        if has_avx2() {
+            // SAFETY: the CPU supports AVX2.
+            return unsafe { self.nearest_avx2(level, ray) };
+        }
+        self.nearest_impl::<false>(level, ray)
+    }
+
+    /// [`Accel::nearest`] compiled with AVX2 enabled (the node test visits exactly the nodes the SSE2 one
+    /// does, so hits do not depend on the CPU).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn nearest_avx2(&self, level: &Level, ray: &Ray) -> Option<Hit> {
+        self.nearest_impl::<true>(level, ray)
+    }
+
+    #[inline(always)]
+    fn nearest_impl<const WIDE: bool>(&self, level: &Level, ray: &Ray) -> Option<Hit> {
         let bvh = level.bvh.as_ref()?;
         let shear = RayShear::new(ray.o, ray.d);
         let mut tr = TravRay::new(ray.o, ray.d, ray.t_max);
         let mut best: Option<Hit> = None;
-        let mut state = bvh.new_traversal(ray.d);
+        let mut state = Traversal::new(bvh, ray.d);
         let mut node;
-        obvhs::traverse!(bvh, node, state, intersect_node::<false>(node, &tr, state.oct_inv4), {
+        obvhs::traverse!(bvh, node, state, intersect_node::<WIDE>(node, &tr, state.oct_inv4), {
             let it = &level.items[state.primitive_id as usize];
             let r = Ray { t_max: tr.t_max, ..*ray };
             let found = match it.r {
@@ -428,30 +513,36 @@ impl Accel {
         best
     }
 
-    /// The slot of a primitive of `level` blocking `ray` (and, for an instance, the slot inside it).
-    fn any(&self, level: &Level, ray: &Ray, skip: Option<&Skip>) -> Option<(u32, u32)> {
+    /// The slot of a primitive of `level` blocking `ray` (and, for an instance, the slot inside it); `shear`
+    /// is the ray's, made once for the hint tests and the traversal.
+    fn any(&self, level: &Level, ray: &Ray, shear: &RayShear, skip: Option<&Skip>) -> Option<(u32, u32)> {
         #[cfg(target_arch = "x86_64")]
         if has_avx2() {
             // SAFETY: the CPU supports AVX2.
-            return unsafe { self.any_avx2(level, ray, skip) };
+            return unsafe { self.any_avx2(level, ray, shear, skip) };
         }
-        self.any_impl::<false>(level, ray, skip)
+        self.any_impl::<false>(level, ray, shear, skip)
     }
 
     /// [`Accel::any`] compiled with AVX2 enabled, so the 8-wide node test inlines into the traversal loop.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn any_avx2(&self, level: &Level, ray: &Ray, skip: Option<&Skip>) -> Option<(u32, u32)> {
-        self.any_impl::<true>(level, ray, skip)
+    unsafe fn any_avx2(&self, level: &Level, ray: &Ray, shear: &RayShear, skip: Option<&Skip>) -> Option<(u32, u32)> {
+        self.any_impl::<true>(level, ray, shear, skip)
     }
 
     #[inline(always)]
-    fn any_impl<const WIDE: bool>(&self, level: &Level, ray: &Ray, skip: Option<&Skip>) -> Option<(u32, u32)> {
+    fn any_impl<const WIDE: bool>(
+        &self,
+        level: &Level,
+        ray: &Ray,
+        shear: &RayShear,
+        skip: Option<&Skip>,
+    ) -> Option<(u32, u32)> {
         let bvh = level.bvh.as_ref()?;
-        let shear = RayShear::new(ray.o, ray.d);
         let tr = TravRay::new(ray.o, ray.d, ray.t_max);
         let mut found = None;
-        let mut state = bvh.new_traversal(ray.d);
+        let mut state = Traversal::new(bvh, ray.d);
         let mut node;
         'search: {
             obvhs::traverse!(bvh, node, state, intersect_node::<WIDE>(node, &tr, state.oct_inv4), {
@@ -468,10 +559,11 @@ impl Accel {
                             .and_then(|k| k.inner)
                             .filter(|(j, _)| *j == i)
                             .map(|(_, p)| Skip { top: Some(p), inner: None });
-                        self.any(&self.objects[inst.object as usize], &local, inner_skip.as_ref())
+                        let local_shear = RayShear::new(local.o, local.d);
+                        self.any(&self.objects[inst.object as usize], &local, &local_shear, inner_skip.as_ref())
                             .map(|(inner, _)| inner)
                     }
-                    _ => self.item_blocks(it, ray, &shear).then_some(u32::MAX),
+                    _ => self.item_blocks(it, ray, shear).then_some(u32::MAX),
                 };
                 if let Some(inner) = blocked {
                     found = Some((slot, inner));

@@ -4,10 +4,92 @@
 //! margin; this one clips to [0, t_max·(1 + 2γ₃)] like pbrt-v3's `Bounds3::IntersectP`, so no hit the
 //! primitive test would report is ever culled. The traversal order and stack are obvhs's (`traverse!`).
 
-use glam::Vec3A;
+use std::mem::MaybeUninit;
+
+use glam::{UVec2, Vec3A, uvec2};
+use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::node::CwBvhNode;
+use obvhs::faststack::FastStack;
 
 use crate::scene::ray::gamma;
+
+/// Depth of the traversal stack (obvhs's own; its build keeps trees shallower than this).
+const STACK_SIZE: usize = 32;
+
+/// The traversal stack of [`Traversal`]: obvhs's fixed-size stack without zero-filling its 32 entries for
+/// every ray (only written entries are ever read).
+pub(super) struct Stack {
+    data: [MaybeUninit<UVec2>; STACK_SIZE],
+    index: usize,
+}
+
+impl FastStack<UVec2> for Stack {
+    /// Pushes; a full stack overwrites its top entry (obvhs's behaviour).
+    #[inline(always)]
+    fn push(&mut self, v: UVec2) {
+        self.data[self.index] = MaybeUninit::new(v);
+        self.index = (self.index + 1).min(STACK_SIZE - 1);
+    }
+
+    #[inline(always)]
+    fn pop_fast(&mut self) -> UVec2 {
+        if self.index == 0 {
+            return UVec2::ZERO;
+        }
+        self.index -= 1;
+        // SAFETY: every entry below the pre-pop index was written by `push`.
+        unsafe { self.data[self.index].assume_init() }
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<UVec2> {
+        (self.index > 0).then(|| self.pop_fast())
+    }
+
+    #[inline(always)]
+    fn len(&self) -> usize {
+        self.index
+    }
+
+    #[inline(always)]
+    fn is_empty(&self) -> bool {
+        self.index == 0
+    }
+
+    #[inline(always)]
+    fn clear(&mut self) {
+        self.index = 0;
+    }
+}
+
+/// The state `obvhs::traverse!` works on (the fields of obvhs's `Traversal` that the macro uses).
+pub(super) struct Traversal {
+    pub stack: Stack,
+    pub current_group: UVec2,
+    pub primitive_group: UVec2,
+    pub oct_inv4: u32,
+    pub primitive_id: u32,
+    pub hitmask: u32,
+}
+
+impl Traversal {
+    /// The start of a traversal of `bvh` in direction `d` (children are visited in the order obvhs picks
+    /// for the direction's octant).
+    #[inline(always)]
+    pub fn new(bvh: &CwBvh, d: Vec3A) -> Self {
+        let oct_inv4 = (if d.x < 0.0 { 0 } else { 0x0404_0404 })
+            | (if d.y < 0.0 { 0 } else { 0x0202_0202 })
+            | (if d.z < 0.0 { 0 } else { 0x0101_0101 });
+        Traversal {
+            stack: Stack { data: [MaybeUninit::uninit(); STACK_SIZE], index: 0 },
+            current_group: if bvh.nodes.is_empty() { UVec2::ZERO } else { uvec2(0, 0x8000_0000) },
+            primitive_group: UVec2::ZERO,
+            oct_inv4,
+            primitive_id: 0,
+            hitmask: 0,
+        }
+    }
+}
 
 /// Per-ray constants of the node test.
 #[derive(Clone, Copy, Debug)]
