@@ -48,10 +48,12 @@ fn checksum(set: &[(&str, &str)]) -> u64 {
     h
 }
 
+/// A placement, extra parameters and the checksum recorded before the refactor.
+type Case = (&'static str, &'static [(&'static str, &'static str)], u64);
+
 #[test]
 fn cache_ao_renders_match_the_recorded_checksums() {
-    // (placement, extra parameters, checksum recorded before the refactor)
-    let cases: [(&str, &[(&str, &str)], u64); 12] = [
+    let cases: [Case; 12] = [
         ("none", &[("gather", "8")], 0x0244_b272_7ad4_53ed),
         ("none", &[], 0x7db1_73a1_19cb_3455),
         ("im", &[], 0xa9c3_10a8_d791_41bf),
