@@ -15,7 +15,7 @@ use glam::Vec3A;
 
 use crate::error::{Error, Result};
 use crate::gbuffer::ShadingPoint;
-use crate::render::params::{IntegratorParams, Parameter};
+use crate::render::params::{IntegratorParams, Parameter, json_f32};
 use crate::sampling::warp::equal_area_hemisphere;
 use crate::sampling::{Frame, Rng};
 use crate::scene::Scene;
@@ -113,9 +113,7 @@ impl Application for CacheAo {
 
     fn settings(&self) -> Vec<(&'static str, serde_json::Value)> {
         let n = (self.dirs.len() as f64).sqrt().round() as u64;
-        let max_distance =
-            if self.max_distance.is_finite() { self.max_distance.into() } else { serde_json::Value::Null };
-        vec![("gather", n.into()), ("maxdistance", max_distance)]
+        vec![("gather", n.into()), ("maxdistance", json_f32(self.max_distance))]
     }
 
     /// pbrt-v3's `ambientocclusion` with the same ray length and cosine sampling, divided by π.

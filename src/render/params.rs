@@ -138,3 +138,9 @@ pub fn markdown_table(params: &[Parameter]) -> String {
     }
     out
 }
+
+/// An `f32` setting as JSON, written with its shortest decimal form (0.2, not 0.20000000298023224);
+/// `null` when not finite.
+pub fn json_f32(v: f32) -> serde_json::Value {
+    v.to_string().parse::<f64>().ok().filter(|x| x.is_finite()).map_or(serde_json::Value::Null, Into::into)
+}

@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::placement::{AngularMode, PlacementParams, registry};
 use crate::scene::Scene;
 
-use super::super::params::{IntegratorParams, Parameter};
+use super::super::params::{IntegratorParams, Parameter, json_f32};
 
 /// The generic parameters of every cache-based integrator: name, pbrt type, default, meaning.
 pub const PARAMETERS: &[Parameter] = &[
@@ -217,17 +217,17 @@ impl CacheSettings {
         let pairs: [(&str, serde_json::Value); 15] = [
             ("placement", self.placement.name().into()),
             ("caches", self.caches.into()),
-            ("ratio", p.ratio.into()),
-            ("sigma_a", p.sigma_a_deg.into()),
-            ("gamma", p.gamma.into()),
-            ("meters_per_unit", p.meters_per_unit.into()),
-            ("lambda", p.lambda.into()),
+            ("ratio", json_f32(p.ratio)),
+            ("sigma_a", p.sigma_a_deg.map(json_f32).into()),
+            ("gamma", json_f32(p.gamma)),
+            ("meters_per_unit", json_f32(p.meters_per_unit)),
+            ("lambda", p.lambda.map(json_f32).into()),
             ("N", p.lookup.candidates.into()),
-            ("theta_max", p.lookup.theta_max_deg.into()),
+            ("theta_max", json_f32(p.lookup.theta_max_deg)),
             ("M", p.lookup.keep.into()),
             ("subpixels", self.subpixels.into()),
             ("sdminsize", p.sd_min_size.into()),
-            ("jitter", p.jitter.into()),
+            ("jitter", json_f32(p.jitter)),
             ("angular", angular.into()),
             ("seed", self.seed.into()),
         ];
