@@ -13,7 +13,9 @@ use crate::scene::accel::PrimOrigin;
 /// Index of a pixel in a G-buffer: `y * width + x`.
 pub type PixelId = u32;
 
-/// The surface seen through one pixel centre.
+/// The surface seen through one pixel centre (or one sub-pixel sample): what placement reads (p, n, depth)
+/// and what shading needs — the shading frame (n with ∂p/∂u), the material and (u, v) its textures are
+/// evaluated at, and the area light of an emitter seen directly. Plain `Copy` data.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadingPoint {
     /// World position.
@@ -28,10 +30,16 @@ pub struct ShadingPoint {
     pub wo: Vec3A,
     /// Distance from the camera position to `p`.
     pub depth: f32,
+    /// ∂p/∂u, not normalised: with `n` it gives the shading frame (tangent = the part of ∂p/∂u orthogonal
+    /// to `n`), as pbrt-v3's BSDF builds it.
+    pub dpdu: Vec3A,
     /// Surface (u, v).
     pub uv: [f32; 2],
     /// Material id.
     pub material: u32,
+    /// Area light id when the surface seen emits (its radiance toward `wo` is added by integrators that
+    /// show emitters).
+    pub area_light: Option<u32>,
     /// The primitive seen (shadow rays from here skip it; see `scene::accel::PrimOrigin`).
     pub origin: Option<PrimOrigin>,
 }
@@ -56,8 +64,10 @@ pub fn shading_point(scene: &Scene, p_film: [f32; 2]) -> Option<ShadingPoint> {
             ng: face(si.ng),
             wo,
             depth: (si.p - cam).length(),
+            dpdu: si.dpdu,
             uv: si.uv,
             material: si.material,
+            area_light: si.area_light,
             origin: Some(si.origin),
         });
     }

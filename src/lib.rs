@@ -7,6 +7,14 @@
 //! |---|---|---|
 //! | 1 | [`parse`] | scene text → directives with file:line:col |
 //! | 2 | [`scene`] | directives → camera, film, shapes, instances, BVH |
+//! | 3 | [`gbuffer`] | one shading point per pixel centre: what placement reads and shading starts from |
+//! | 4 | [`placement`] | where caches go: the strategies (IM, SD, VGC; AS, DGS) and their registry by name |
+//! | 5 | [`cache`] | the kd-tree over cache positions and the selection of a sample's caches (Eq. 5) |
+//! | 5 | [`application`] | what a cache holds: one file per cache-based application (the `Application` trait) and `application::registry`, the one list of them — **the seam for a new application** |
+//! | 5 | [`shading`] | textures, materials, lights: what a surface does with light |
+//! | 6 | [`render`] | the per-pixel integrators and pixel loop, and `render::cache_driver`, the one generic driver of every cache-based integrator |
+//! | — | [`experiment`] | sweeps of placements × budgets × seeds against the per-sample reference |
+//! | — | [`sampling`] | random streams keyed by pixel, low-discrepancy sequences, warps, frames |
 //! | — | [`image`] | f32 RGB images; EXR, PFM and PNG in and out |
 //! | — | [`metrics`] | RMSE, relMSE, HDR-FLIP |
 //! | — | [`cli`] | the subcommands of the `cachert` binary |

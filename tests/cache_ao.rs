@@ -254,14 +254,17 @@ fn error_falls_as_caches_grow_on_the_shipped_room() {
 }
 
 #[test]
-fn the_documented_parameter_table_is_exactly_what_cacheao_reads() {
+fn the_documented_parameter_tables_are_exactly_what_cacheao_reads() {
+    use cachert::application::Application;
+    use cachert::application::ambient_occlusion::CacheAo;
+    use cachert::render::cache_driver::{self, PARAMETERS};
     let e = run(&sphere_scene(), &[("zzz", "1")], None).unwrap_err().to_string();
     let (_, list) = e.split_once("it reads: ").unwrap_or_else(|| panic!("{e}"));
     let mut read: Vec<&str> = list.trim_end_matches(')').split(", ").collect();
-    let mut documented: Vec<&str> = cachert::render::cacheao::PARAMETERS.iter().map(|p| p.0).collect();
+    let mut documented: Vec<&str> = PARAMETERS.iter().chain(CacheAo::PARAMETERS).map(|p| p.name).collect();
     read.sort_unstable();
     documented.sort_unstable();
     assert_eq!(read, documented);
-    let help = cachert::render::cacheao::help();
-    assert!(documented.iter().all(|n| help.contains(n)), "{help}");
+    let help = cache_driver::help();
+    assert!(documented.iter().all(|n| help.contains(n)) && help.contains("cacheao"), "{help}");
 }

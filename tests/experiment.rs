@@ -7,18 +7,20 @@ mod common;
 use std::path::Path;
 
 use cachert::experiment::{Sweep, run};
+use cachert::render::cache_driver::Placement;
 
-fn sweep(out: &Path, ao_samples: Vec<u32>) -> Sweep {
+fn sweep(out: &Path, baseline_samples: Vec<u32>) -> Sweep {
     Sweep {
         scenes: vec![Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/spheres.pbrt")],
         resolution: Some([48, 32]),
         caches: vec![40, 320],
-        placements: vec!["im".into(), "vgc+dgs".into()],
+        integrator: "cacheao".into(),
+        placements: vec![Placement::parse("im").unwrap(), Placement::parse("vgc+dgs").unwrap()],
         seeds: 2,
         set: vec![],
         out: out.to_path_buf(),
         threads: Some(2),
-        ao_samples,
+        baseline_samples,
     }
 }
 
@@ -41,7 +43,7 @@ fn a_sweep_writes_every_row_and_its_files_and_reuses_the_reference() {
     assert!(conv("ao:16") < conv("ao:1"));
     let csv = std::fs::read_to_string(dir.path("results.csv")).unwrap();
     assert_eq!(csv.lines().count(), 12);
-    assert!(dir.path("results.json").is_file() && dir.path("scenes-spheres-converged.exr").is_file());
+    assert!(dir.path("results.json").is_file() && dir.path("scenes-spheres-cacheao-converged.exr").is_file());
     assert!(table.contains("| vgc+dgs |") && table.contains("converged"), "{table}");
 
     // A second sweep reuses the stored reference and converged image.

@@ -7,17 +7,22 @@
 //! `max_distance` (default 0.1·L, CHOICE A14). Two caches differ by the Hamming distance of their masks.
 //! A sample is shaded by the inverse-distance blend of its caches' AO; the reference evaluates the same
 //! n² rays at the sample itself.
+//!
+//! Registered as the integrator `cacheao`; its own parameters are [`CacheAo::PARAMETERS`]. The image holds
+//! AO in [0, 1], not pbrt-v3's π-scaled value.
 
 use glam::Vec3A;
 
+use crate::error::{Error, Result};
 use crate::gbuffer::ShadingPoint;
+use crate::render::params::{IntegratorParams, Parameter, json_f32};
 use crate::sampling::warp::equal_area_hemisphere;
 use crate::sampling::{Frame, Rng};
 use crate::scene::Scene;
 use crate::scene::accel::OccluderHint;
 use crate::scene::ray::{Ray, RayCounters, offset_ray_origin};
 
-use super::Application;
+use super::{Application, Baseline, Neighbour};
 
 /// A visibility cache: one bit per gathering direction and the AO value.
 #[derive(Clone, Debug, PartialEq)]
@@ -81,10 +86,47 @@ impl CacheAo {
 }
 
 impl Application for CacheAo {
+    const NAME: &'static str = "cacheao";
+    const ABOUT: &'static str = "cache-based ambient occlusion (visibility caches), AO in [0, 1]";
+    const PARAMETERS: &'static [Parameter] = &[
+        Parameter::new("gather", "integer", "32", "gathering grid side: gather² rays per cache"),
+        Parameter::new("maxdistance", "float", "0.1 · L", "occlusion ray length"),
+    ];
+
     type Record = VisibilityRecord;
 
-    fn name(&self) -> &'static str {
-        "cacheao"
+    fn from_params(p: &IntegratorParams<'_>, scene: &Scene) -> Result<Self> {
+        let bad = |name: &str, what: String| Error::usage(format!("{}{}: \"{name}\" {what}", p.at(name), Self::NAME));
+        let gather = p.int_or("gather", 32)?;
+        if !(1..=256).contains(&gather) {
+            return Err(bad("gather", format!("must be between 1 and 256, got {gather}")));
+        }
+        let l = scene.diagonal();
+        let max_distance = match p.float("maxdistance")? {
+            Some(v) if v > 0.0 && v.is_finite() => v as f32,
+            Some(v) => return Err(bad("maxdistance", format!("must be positive, got {v}"))),
+            None if l > 0.0 => 0.1 * l,
+            None => f32::INFINITY,
+        };
+        Ok(CacheAo::new(gather as usize, max_distance))
+    }
+
+    fn settings(&self) -> Vec<(&'static str, serde_json::Value)> {
+        let n = (self.dirs.len() as f64).sqrt().round() as u64;
+        vec![("gather", n.into()), ("maxdistance", json_f32(self.max_distance))]
+    }
+
+    /// pbrt-v3's `ambientocclusion` with the same ray length and cosine sampling, divided by π.
+    fn baseline(&self) -> Option<Baseline> {
+        // The per-pixel integrator needs a finite length: 1e30 is "unbounded" for any scene.
+        let d = if self.max_distance.is_finite() { self.max_distance.to_string() } else { "1e30".into() };
+        Some(Baseline {
+            label: "ao",
+            integrator: "ambientocclusion",
+            set: vec![("maxdistance".into(), d), ("cossample".into(), "true".into())],
+            samples: "nsamples",
+            scale: std::f32::consts::FRAC_1_PI,
+        })
     }
 
     fn compute_record(
@@ -105,14 +147,14 @@ impl Application for CacheAo {
         &self,
         _: &Scene,
         _: &ShadingPoint,
-        near: &[(&VisibilityRecord, f32)],
+        near: &[Neighbour<'_, VisibilityRecord>],
         _: &mut Rng,
         _: &mut RayCounters,
     ) -> [f32; 3] {
         let (mut sum, mut wsum) = (0.0f32, 0.0f32);
-        for (r, w) in near {
-            sum += w * r.ao;
-            wsum += w;
+        for c in near {
+            sum += c.weight * c.record.ao;
+            wsum += c.weight;
         }
         [if wsum > 0.0 { sum / wsum } else { 0.0 }; 3]
     }

@@ -1,25 +1,83 @@
-//! WHAT a cache holds: one module per cache-based application (DESIGN.md §2). An application computes a
-//! record at a cache site (value plus per-sample gathering data), compares two records (for the second-stage
-//! placement strategies), shades a sample from its selected caches, and gives the brute-force answer the
-//! cache approximates. Placement never sees the record type, so every strategy works with every
-//! application.
+//! STAGE 5 (application): WHAT a cache holds — one module per cache-based application (DESIGN.md §2), and
+//! [`registry`], the one list of them by the integrator names users type. An application reads its own
+//! parameters, computes a record at a cache site (value plus per-sample gathering data), compares two records
+//! (for the second-stage placement strategies), shades a sample from its selected caches, and gives the
+//! brute-force answer the cache approximates. Placement never sees the record type, so every strategy works
+//! with every application.
 //!
-//! Depends on `scene`, `gbuffer` and `sampling`; never on `placement` or the render driver.
+//! Adding an application: one file here implementing [`Application`] and one line in [`registry`]; the
+//! render stage's cache driver (`render::cache_driver`), `render --help`, `info` and `experiment` pick it up
+//! from there.
+//!
+//! Depends on `scene`, `gbuffer`, `sampling` and the parameter reader `render::params`; never on
+//! `placement` or the cache driver.
 
 pub mod ambient_occlusion;
+pub mod registry;
 
+use glam::Vec3A;
+
+use crate::error::Result;
 use crate::gbuffer::ShadingPoint;
+use crate::render::params::{IntegratorParams, Parameter};
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::scene::ray::RayCounters;
 
+/// One cache selected for a shading point (ALGORITHMS.md §5): its record, where it is, and its
+/// interpolation weight.
+#[derive(Clone, Copy, Debug)]
+pub struct Neighbour<'a, R> {
+    /// The cache's record.
+    pub record: &'a R,
+    /// The cache's position.
+    pub p: Vec3A,
+    /// The cache's unit shading normal (faced toward the camera).
+    pub n: Vec3A,
+    /// The interpolation weight 1 / Dist (Eq. 5); Σ over the selection > 0.
+    pub weight: f32,
+}
+
+/// The per-pixel integrator an application's images can be compared with (`experiment --ao-samples`): its
+/// name, the parameters that make it compute the same quantity, the parameter that takes the ray count,
+/// and the factor that brings its values to the application's scale.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Baseline {
+    /// Short label of its rows in experiment results (`ao` gives rows `ao:N`).
+    pub label: &'static str,
+    /// Per-pixel integrator name (`ambientocclusion`).
+    pub integrator: &'static str,
+    /// Parameters matching the application's settings (e.g. the ray length).
+    pub set: Vec<(String, String)>,
+    /// The parameter that sets the rays per pixel sample (`nsamples`).
+    pub samples: &'static str,
+    /// Multiplies the per-pixel image to the application's units.
+    pub scale: f32,
+}
+
 /// A cache-based rendering application.
-pub trait Application: Sync {
+pub trait Application: Sync + Sized {
+    /// The integrator name users type (in the scene's `Integrator` line or `--integrator`).
+    const NAME: &'static str;
+    /// One line saying what the integrator renders (for `--help`, `info` and error messages).
+    const ABOUT: &'static str;
+    /// The application's own parameters (beside the cache driver's generic ones); the README has the same
+    /// table under the application's name.
+    const PARAMETERS: &'static [Parameter];
+
     /// What one cache stores.
     type Record: Send + Sync;
 
-    /// The integrator name users type (`"cacheao"`).
-    fn name(&self) -> &'static str;
+    /// Reads exactly the parameters of [`Application::PARAMETERS`] (a bad value is an error naming it).
+    fn from_params(p: &IntegratorParams<'_>, scene: &Scene) -> Result<Self>;
+
+    /// The resolved parameters (defaults filled in), for the `--stats` report.
+    fn settings(&self) -> Vec<(&'static str, serde_json::Value)>;
+
+    /// The per-pixel integrator computing the same image, if there is one.
+    fn baseline(&self) -> Option<Baseline> {
+        None
+    }
 
     /// Evaluates the expensive shading function at a cache site: the value and the per-sample gathering
     /// data that [`Application::diff`] compares.
@@ -28,12 +86,12 @@ pub trait Application: Sync {
     /// Σ_k |g_a[k] − g_b[k]| over corresponding gathering samples (ALGORITHMS.md §4.5.2).
     fn diff(&self, a: &Self::Record, b: &Self::Record) -> f32;
 
-    /// Shades one sample from its selected caches with their interpolation weights (Σ weights > 0).
+    /// Shades one sample from its selected caches (at least one; Σ weights > 0).
     fn shade(
         &self,
         scene: &Scene,
         s: &ShadingPoint,
-        near: &[(&Self::Record, f32)],
+        near: &[Neighbour<'_, Self::Record>],
         rng: &mut Rng,
         rays: &mut RayCounters,
     ) -> [f32; 3];

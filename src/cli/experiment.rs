@@ -3,8 +3,10 @@
 
 use std::path::PathBuf;
 
+use crate::application::registry;
 use crate::error::{Error, Result};
 use crate::experiment::{Sweep, run as run_sweep};
+use crate::render::cache_driver::Placement;
 
 /// Flags of `cachert experiment`.
 #[derive(clap::Args, Debug, Clone)]
@@ -15,6 +17,9 @@ pub struct ExperimentArgs {
     /// Film resolution WxH for every scene (e.g. 640x360).
     #[arg(long, value_parser = super::parse_resolution)]
     pub resolution: Option<[u32; 2]>,
+    /// The cache-based integrator (default: the first registered; see `cachert render --help`).
+    #[arg(long)]
+    pub integrator: Option<String>,
     /// Cache budgets, comma-separated.
     #[arg(long, default_value = "13000")]
     pub caches: String,
@@ -24,7 +29,7 @@ pub struct ExperimentArgs {
     /// Number of seeds (0, 1, …) averaged per setting.
     #[arg(long, default_value_t = 3)]
     pub seeds: u64,
-    /// cacheao parameter for every run (repeatable), e.g. --set maxdistance=0.6.
+    /// Integrator parameter for every run (repeatable), e.g. --set maxdistance=0.6.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
     /// Output folder (reference images are kept there and reused).
@@ -33,16 +38,16 @@ pub struct ExperimentArgs {
     /// Worker threads.
     #[arg(long)]
     pub nthreads: Option<usize>,
-    /// Also time pbrt-v3-style per-pixel `ambientocclusion` at these AO ray counts (per pixel sample,
-    /// comma-separated) against the same reference.
-    #[arg(long = "ao-samples")]
-    pub ao_samples: Option<String>,
+    /// Also time the integrator's per-pixel baseline (pbrt-v3's `ambientocclusion` for AO) at these ray
+    /// counts (per pixel sample, comma-separated) against the same reference.
+    #[arg(long = "baseline-samples", visible_alias = "ao-samples")]
+    pub baseline_samples: Option<String>,
 }
 
 /// Runs the sweep and returns the table.
 pub fn run(a: &ExperimentArgs) -> Result<String> {
     let caches = counts("--caches", &a.caches)?;
-    let ao_samples = match &a.ao_samples {
+    let baseline_samples = match &a.baseline_samples {
         Some(list) => counts("--ao-samples", list)?.into_iter().map(|n| n.min(u32::MAX as usize) as u32).collect(),
         None => Vec::new(),
     };
@@ -55,16 +60,19 @@ pub fn run(a: &ExperimentArgs) -> Result<String> {
                 .ok_or_else(|| Error::usage(format!("--set {kv}: expected KEY=VALUE")))
         })
         .collect::<Result<Vec<_>>>()?;
+    let placements = a.placements.split(',').map(|s| Placement::parse(s.trim())).collect::<Result<Vec<_>>>()?;
+    let default = registry::APPLICATIONS.first().map_or("", |e| e.name);
     let sweep = Sweep {
+        integrator: a.integrator.clone().unwrap_or_else(|| default.to_string()),
         scenes: a.scenes.clone(),
         resolution: a.resolution,
         caches,
-        placements: a.placements.split(',').map(|s| s.trim().to_string()).collect(),
+        placements,
         seeds: a.seeds.max(1),
         set,
         out: a.out.clone(),
         threads: a.nthreads,
-        ao_samples,
+        baseline_samples,
     };
     let (_, table) = run_sweep(&sweep, &mut |line| eprintln!("{line}"))?;
     Ok(format!("{table}\nresults: {}/results.csv, results.json", a.out.display()))

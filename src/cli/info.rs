@@ -24,7 +24,13 @@ pub fn run(args: &InfoArgs) -> Result<String> {
     let _ = writeln!(o, "camera      {:?} at {:?}", s.camera.projection, s.camera.position().to_array());
     let _ = writeln!(o, "sampler     {} ({} spp)", s.sampler.name, s.sampler.spp);
     let integrator = l.integrator.as_ref().map_or("path (pbrt-v3 default)", |n| n.name.as_str());
-    let _ = writeln!(o, "integrator  {integrator}");
+    let name = l.integrator.as_ref().map_or("path", |n| n.name.as_str());
+    let kind = match crate::application::registry::entry(name) {
+        Some(e) => format!("cache-based: {}", e.about),
+        None if crate::render::INTEGRATORS.contains(&name) => "per-pixel".to_string(),
+        None => format!("not implemented; choose one with --integrator: {}", crate::render::integrator_names()),
+    };
+    let _ = writeln!(o, "integrator  {integrator} ({kind})");
     let world_tris: usize = s.geometry.meshes.iter().map(|m| m.triangle_count()).sum();
     let object_tris: usize = s.geometry.objects.iter().flat_map(|o| &o.meshes).map(|m| m.triangle_count()).sum();
     let (_, objects, instances) = s.geometry.accel.counts();

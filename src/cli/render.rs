@@ -4,13 +4,15 @@
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
+use crate::application::registry;
 use crate::error::Result;
+use crate::render::cache_driver::{CacheOverrides, Placement};
 use crate::render::{RenderSettings, render};
 use crate::scene::{LoadOptions, load};
 
 /// Flags of `cachert render`.
 #[derive(clap::Args, Debug, Clone)]
-#[command(after_long_help = crate::render::cacheao::help())]
+#[command(after_long_help = crate::render::cache_driver::help())]
 pub struct RenderArgs {
     /// The pbrt-v3 scene file.
     pub scene: PathBuf,
@@ -36,16 +38,16 @@ pub struct RenderArgs {
     /// No progress bar and no summary (warnings still go to stderr).
     #[arg(long)]
     pub quiet: bool,
-    /// Integrator to use instead of the scene's (e.g. ambientocclusion).
+    /// Integrator to use instead of the scene's (e.g. ambientocclusion, or a cache-based one; see below).
     #[arg(long)]
     pub integrator: Option<String>,
-    /// Cache placement strategy (sets the cacheao parameter "placement"): none, im, sd, sd+as, vgc,
-    /// vgc+dgs, vgc+as, vgc+dgs:diff, vgc+dgs:geom.
+    /// Cache-based integrators: the placement strategy (the parameter "placement"): none, im, sd, sd+as,
+    /// vgc, vgc+dgs, vgc+as, vgc+dgs:diff, vgc+dgs:geom.
+    #[arg(long, value_parser = parse_placement)]
+    pub placement: Option<Placement>,
+    /// Cache-based integrators: the total cache budget (the parameter "caches").
     #[arg(long)]
-    pub placement: Option<String>,
-    /// Total cache budget (sets the cacheao parameter "caches").
-    #[arg(long)]
-    pub caches: Option<u64>,
+    pub caches: Option<usize>,
     /// Cache-based renders: write the image with stage-1 caches (red) and stage-2 caches (cyan) marked.
     #[arg(long)]
     pub overlay: Option<PathBuf>,
@@ -58,6 +60,10 @@ pub struct RenderArgs {
     /// Set an integrator parameter, overriding the scene file (repeatable), e.g. --set nsamples=16.
     #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_key_value)]
     pub set: Vec<(String, String)>,
+}
+
+fn parse_placement(s: &str) -> std::result::Result<Placement, String> {
+    Placement::parse(s.trim()).map_err(|e| e.to_string())
 }
 
 fn parse_key_value(s: &str) -> std::result::Result<(String, String), String> {
@@ -78,7 +84,8 @@ pub fn run(args: &RenderArgs) -> Result<String> {
         progress: !args.quiet && std::io::stderr().is_terminal() && std::io::stdout().is_terminal(),
         quick: args.quick,
         integrator: args.integrator.clone(),
-        set: cli_overrides(args),
+        set: args.set.clone(),
+        cache: CacheOverrides { placement: args.placement, caches: args.caches, subpixels: None },
     };
     // Settle the output name before rendering, so a bad extension fails fast.
     let out = output_path(args, &loaded.scene.film.filename);
@@ -89,9 +96,10 @@ pub fn run(args: &RenderArgs) -> Result<String> {
     // Check every requested output before writing any, so a failed run leaves nothing behind.
     let cache = result.cache.as_deref();
     if (args.overlay.is_some() || args.dmap.is_some() || args.stats.is_some()) && cache.is_none() {
-        return Err(crate::Error::usage(
-            "--overlay, --dmap and --stats need a cache-based integrator (--integrator cacheao)",
-        ));
+        return Err(crate::Error::usage(format!(
+            "--overlay, --dmap and --stats need a cache-based integrator (--integrator with one of: {})",
+            registry::names()
+        )));
     }
     if args.dmap.is_some() && cache.is_some_and(|c| c.discontinuity.is_none()) {
         return Err(crate::Error::usage(
@@ -114,7 +122,8 @@ pub fn run(args: &RenderArgs) -> Result<String> {
                 "scene": args.scene.display().to_string(),
                 "integrator": result.integrator,
                 "seed": args.seed,
-                "set": cli_overrides(args).iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>(),
+                "set": args.set.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>(),
+                "parameters": c.settings,
             });
             crate::cli::cache_outputs::write_stats(c, &settings, p)?;
         }
@@ -166,18 +175,6 @@ pub fn print_warnings(w: &crate::error::Warnings) {
     for w in w.iter() {
         eprintln!("{w}");
     }
-}
-
-/// `--set` pairs plus the `--placement`/`--caches` shorthands (which win, coming last).
-fn cli_overrides(args: &RenderArgs) -> Vec<(String, String)> {
-    let mut set = args.set.clone();
-    if let Some(p) = &args.placement {
-        set.push(("placement".into(), p.clone()));
-    }
-    if let Some(c) = args.caches {
-        set.push(("caches".into(), c.to_string()));
-    }
-    set
 }
 
 fn output_path(args: &RenderArgs, film_name: &Option<PathBuf>) -> PathBuf {

@@ -2,17 +2,22 @@
 //! per-sample reference by RMSE and HDR-FLIP; results go to CSV and JSON (charts and the HTML report are
 //! built from these files, never from logs) and a table of averages over seeds.
 //!
-//! Depends on `scene`, `render`, `image` and `metrics`; nothing depends on it.
+//! Any cache-based integrator of the application registry can be swept (`Sweep::integrator`); the per-pixel
+//! comparison uses the application's own per-pixel baseline (`Application::baseline`).
+//!
+//! Depends on `scene`, `render`, `application` (the registry), `image` and `metrics`; nothing depends on it.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use crate::application::registry;
 use crate::error::{Error, Result, Warnings};
 use crate::image::Image;
 use crate::metrics::{Metric, compare};
-use crate::render::cache_stats::StageTimes;
+use crate::render::cache_driver::stats::{CacheStats, StageTimes};
+use crate::render::cache_driver::{CacheOverrides, CachedOutput, Placement};
 use crate::render::{RenderSettings, render};
 use crate::scene::{LoadOptions, LoadedScene, load};
 
@@ -25,21 +30,24 @@ pub struct Sweep {
     pub scenes: Vec<PathBuf>,
     /// Film resolution for every scene.
     pub resolution: Option<[u32; 2]>,
+    /// The cache-based integrator (a name of `application::registry`).
+    pub integrator: String,
     /// Cache budgets.
     pub caches: Vec<usize>,
-    /// Placement names.
-    pub placements: Vec<String>,
+    /// Placements.
+    pub placements: Vec<Placement>,
     /// Seeds 0..seeds.
     pub seeds: u64,
-    /// Extra `cacheao` parameters for every run (e.g. maxdistance).
+    /// Extra parameters of the integrator for every run (e.g. maxdistance).
     pub set: Vec<(String, String)>,
     /// Output folder.
     pub out: PathBuf,
     /// Worker threads.
     pub threads: Option<usize>,
-    /// Also render pbrt-v3's per-pixel `ambientocclusion` with these AO ray counts (per pixel sample) and
-    /// measure it against the same reference (rows `ao:N`), with the reference's own time (row `none`).
-    pub ao_samples: Vec<u32>,
+    /// Also render the application's per-pixel baseline (pbrt-v3's `ambientocclusion` for AO) with these ray
+    /// counts (per pixel sample) and measure it against the same reference (rows `ao:N`), with the
+    /// reference's own time (row `none`).
+    pub baseline_samples: Vec<u32>,
 }
 
 /// One measured run.
@@ -60,7 +68,7 @@ pub struct Row {
     /// RMSE and mean HDR-FLIP against the converged per-pixel image (with `--ao-samples`; seed 0 only).
     pub converged: Option<(f64, f64)>,
     /// Stage times and counts of the run.
-    pub stats: crate::render::cache_stats::CacheStats,
+    pub stats: CacheStats,
 }
 
 /// The part of stored reference file names that depends on the sweep's `--set` parameters (empty without
@@ -84,28 +92,41 @@ fn name_of(p: &Path) -> String {
 fn run_one(
     l: &LoadedScene,
     sweep: &Sweep,
-    placement: &str,
+    placement: Placement,
     caches: usize,
     seed: u64,
-) -> Result<(Image, crate::render::cached::CachedOutput)> {
-    let mut set = sweep.set.clone();
-    set.push(("placement".into(), placement.into()));
-    set.push(("caches".into(), caches.to_string()));
-    let settings =
-        RenderSettings { seed, threads: sweep.threads, integrator: Some("cacheao".into()), set, ..Default::default() };
+) -> Result<(Image, CachedOutput)> {
+    let settings = RenderSettings {
+        seed,
+        threads: sweep.threads,
+        integrator: Some(sweep.integrator.clone()),
+        set: sweep.set.clone(),
+        cache: CacheOverrides { placement: Some(placement), caches: Some(caches), subpixels: None },
+        ..Default::default()
+    };
     let out = render(&l.scene, l.integrator.as_ref(), &settings, &mut Warnings::default())?;
-    let cache = out.cache.ok_or_else(|| Error::usage("experiment: cacheao produced no cache report"))?;
+    let cache = out
+        .cache
+        .ok_or_else(|| Error::usage(format!("experiment: \"{}\" produced no cache report", sweep.integrator)))?;
     Ok((out.image, *cache))
 }
 
 /// Runs the sweep; returns all rows (also written to `out/results.{csv,json}`) and the summary table.
 pub fn run(sweep: &Sweep, log: &mut dyn FnMut(&str)) -> Result<(Vec<Row>, String)> {
+    if registry::entry(&sweep.integrator).is_none() {
+        return Err(Error::usage(format!(
+            "experiment: \"{}\" is not a cache-based integrator (one of: {})",
+            sweep.integrator,
+            registry::names()
+        )));
+    }
     std::fs::create_dir_all(&sweep.out).map_err(|e| Error::file(&sweep.out, format!("cannot create: {e}")))?;
     let mut rows = Vec::new();
     for path in &sweep.scenes {
         let name = name_of(path);
         let mut l = load(path, LoadOptions { resolution: sweep.resolution, ..Default::default() })?;
-        let stored = format!("{name}{}", variant(&sweep.set));
+        // Stored images depend on the integrator and its parameters: another run never reuses them.
+        let stored = format!("{name}-{}{}", sweep.integrator, variant(&sweep.set));
         let ref_path = sweep.out.join(format!("{stored}-reference.exr"));
         let time_path = sweep.out.join(format!("{stored}-reference-seconds.txt"));
         let cached = crate::image::read(&ref_path)
@@ -115,7 +136,7 @@ pub fn run(sweep: &Sweep, log: &mut dyn FnMut(&str)) -> Result<(Vec<Row>, String
         let (reference, ref_secs) = match cached {
             Some(found) => found,
             None => {
-                let (img, c) = run_one(&l, sweep, "none", 1, 0)?;
+                let (img, c) = run_one(&l, sweep, Placement::Reference, 1, 0)?;
                 let secs = c.stats.times.total;
                 log(&format!("{name}: reference in {secs:.1} s"));
                 crate::image::write(&img, &ref_path)?;
@@ -125,20 +146,21 @@ pub fn run(sweep: &Sweep, log: &mut dyn FnMut(&str)) -> Result<(Vec<Row>, String
             }
         };
         // With --ao-samples: the converged image every seed-0 render is also measured against.
-        let converged = if sweep.ao_samples.is_empty() {
+        let converged = if sweep.baseline_samples.is_empty() {
             None
         } else {
-            let conv = per_pixel::converged(&mut l, sweep, &stored, log)?;
+            let base = per_pixel::baseline(&l, sweep)?;
+            let conv = per_pixel::converged(&mut l, sweep, &base, &stored, log)?;
             let times = StageTimes { total: ref_secs, ..Default::default() };
-            let stats = crate::render::cache_stats::CacheStats { times, ..Default::default() };
+            let stats = CacheStats { times, ..Default::default() };
             let against = Some(per_pixel::measure(&reference, &conv)?);
             let (scene, placement) = (name.clone(), "none".to_string());
             rows.push(Row { scene, placement, caches: 0, seed: 0, rmse: 0.0, flip: 0.0, converged: against, stats });
-            rows.extend(per_pixel::rows(&mut l, sweep, &name, &reference, &conv, log)?);
+            rows.extend(per_pixel::rows(&mut l, sweep, &base, &name, (&reference, &conv), log)?);
             Some(conv)
         };
         for &caches in &sweep.caches {
-            for placement in &sweep.placements {
+            for &placement in &sweep.placements {
                 for seed in 0..sweep.seeds {
                     let (img, c) = run_one(&l, sweep, placement, caches, seed)?;
                     let m = compare(&img, &reference, &[Metric::Rmse, Metric::Flip])?;
@@ -154,12 +176,14 @@ pub fn run(sweep: &Sweep, log: &mut dyn FnMut(&str)) -> Result<(Vec<Row>, String
                     if seed == 0 {
                         crate::image::write(
                             &img,
-                            &sweep.out.join(format!("{name}-{}-{caches}.exr", placement.replace([':', '+'], "_"))),
+                            &sweep
+                                .out
+                                .join(format!("{name}-{}-{caches}.exr", placement.name().replace([':', '+'], "_"))),
                         )?;
                     }
                     rows.push(Row {
                         scene: name.clone(),
-                        placement: placement.clone(),
+                        placement: placement.to_string(),
                         caches,
                         seed,
                         rmse,
@@ -219,8 +243,8 @@ fn table(rows: &[Row], sweep: &Sweep) -> String {
         if !measured.is_empty() {
             let _ = writeln!(
                 t,
-                "\n{scene}, against the converged per-pixel image (`none`: the per-sample reference; `ao:N`: \
-                 ambientocclusion, N rays × 4 pixel samples, ÷ π; placements: seed 0)\n\n\
+                "\n{scene}, against the converged per-pixel image (`none`: the per-sample reference; `LABEL:N`: \
+                 the per-pixel baseline, N rays × 4 pixel samples; placements: seed 0)\n\n\
                  | render | caches | RMSE | HDR-FLIP | total s |\n|---|---|---|---|---|"
             );
             for r in measured {
@@ -240,7 +264,7 @@ fn table(rows: &[Row], sweep: &Sweep) -> String {
             );
             for p in &sweep.placements {
                 let sel: Vec<&Row> =
-                    rows.iter().filter(|r| r.scene == scene && r.caches == caches && &r.placement == p).collect();
+                    rows.iter().filter(|r| r.scene == scene && r.caches == caches && r.placement == p.name()).collect();
                 if sel.is_empty() {
                     continue;
                 }

@@ -156,8 +156,10 @@ mod tests {
                 ng: n,
                 wo: Vec3A::Z,
                 depth: 1.0,
+                dpdu: Vec3A::ZERO,
                 uv: [0.0; 2],
                 material: 0,
+                area_light: None,
                 origin: None,
             })
         });

@@ -83,8 +83,10 @@ pub fn cast(w: usize, h: usize, eye: Vec3A, at: Vec3A, prims: &[Prim], diagonal:
             ng: n,
             wo: -d,
             depth: t,
+            dpdu: Vec3A::ZERO,
             uv: [0.0; 2],
             material: 0,
+            area_light: None,
             origin: None,
         })
     })

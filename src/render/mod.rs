@@ -1,12 +1,12 @@
 //! STAGE 6: rendering — the pixel loop (tiles in parallel, samples keyed by pixel and index, film
-//! reconstruction) and the per-pixel integrators, chosen by name from one registry.
+//! reconstruction) and the per-pixel integrators, chosen by name; cache-based integrators come from the
+//! application registry and render through [`cache_driver`].
 //!
-//! Depends on `scene` (what to render), `sampling` and `image`; the scene never depends on this module.
+//! Depends on `scene` (what to render), `sampling`, `image` and, for cache-based integrators, `application`;
+//! the scene never depends on this module.
 
 pub mod ao;
-pub mod cache_stats;
-pub mod cacheao;
-pub mod cached;
+pub mod cache_driver;
 pub mod directlighting;
 mod driver;
 pub mod film;
@@ -17,11 +17,12 @@ pub mod samples;
 
 pub use driver::render_image;
 
+use crate::application::registry;
 use crate::error::{Error, Result, Warnings};
 use crate::image::Image;
 use crate::parse::{Named, ParamList};
+use crate::scene::Scene;
 use crate::scene::ray::Ray;
-use crate::scene::{Scene, filter};
 
 use samples::PixelSamples;
 
@@ -57,6 +58,8 @@ pub struct RenderSettings {
     pub integrator: Option<String>,
     /// Integrator parameters set on the command line (`--set key=value`), overriding the scene's.
     pub set: Vec<(String, String)>,
+    /// Typed settings of cache-based integrators (`--placement`, `--caches`), winning over `set`.
+    pub cache: cache_driver::CacheOverrides,
 }
 
 /// What a render produced.
@@ -73,11 +76,18 @@ pub struct RenderOutput {
     /// The integrator that ran.
     pub integrator: String,
     /// Cache placement, statistics and maps of a cache-based render.
-    pub cache: Option<Box<cached::CachedOutput>>,
+    pub cache: Option<Box<cache_driver::CachedOutput>>,
 }
 
-/// The integrators cachert implements, by scene-file name.
-pub const INTEGRATORS: [&str; 4] = ["ambientocclusion", "cacheao", "directlighting", "path"];
+/// The per-pixel integrators cachert implements, by scene-file name (the cache-based ones are
+/// `application::registry::APPLICATIONS`).
+pub const INTEGRATORS: &[&str] = &["ambientocclusion", "directlighting", "path"];
+
+/// Every integrator name, per-pixel then cache-based, comma-separated (for messages).
+pub fn integrator_names() -> String {
+    let cached = registry::APPLICATIONS.iter().map(|e| e.name);
+    INTEGRATORS.iter().copied().chain(cached).collect::<Vec<_>>().join(", ")
+}
 
 /// Builds the integrator named by the scene (or by `settings.integrator`) and renders.
 pub fn render(
@@ -111,24 +121,15 @@ pub fn render(
             ),
         );
     }
-    if name == "cacheao" {
-        let set = cache_sample_settings(scene, params, settings, warnings);
-        let iparams = params::IntegratorParams::new(params, &set);
-        let (app, cs) = cacheao::settings(&iparams, scene, settings.seed, settings.progress)?;
-        iparams.check_overrides(name)?;
-        report_unused(integrator, name, &set, warnings);
-        let run = || cached::render_cached(scene, &app, &cs);
-        let out = with_threads(settings.threads, run)??;
-        let mut rays = out.stats.cache_rays;
-        rays.add(&out.stats.render_rays);
-        return Ok(RenderOutput {
-            image: out.image.clone(),
-            rays,
-            render_secs: out.stats.times.total,
-            spp: cs.subpixels,
-            integrator: format!("cacheao, placement {}", cs.placement),
-            cache: Some(Box::new(out)),
-        });
+    let cache = cache_driver::CacheRender { scene, integrator, settings, warnings: &mut *warnings };
+    if let Some(out) = registry::dispatch(name, cache) {
+        return out;
+    }
+    if settings.cache != cache_driver::CacheOverrides::default() {
+        return Err(Error::usage(format!(
+            "--placement and --caches apply to cache-based integrators ({}), not to \"{name}\"",
+            registry::names()
+        )));
     }
     let iparams = params::IntegratorParams::new(params, &settings.set);
     let pixel: Box<dyn PixelIntegrator> = match name {
@@ -140,7 +141,7 @@ pub fn render(
         other => {
             return Err(Error::usage(format!(
                 "integrator \"{other}\" is not implemented by cachert (available: {}); choose one with --integrator",
-                INTEGRATORS.join(", ")
+                integrator_names()
             )));
         }
     };
@@ -152,7 +153,7 @@ pub fn render(
 }
 
 /// Runs `f` in a pool of `threads` workers (default, or 0 as in pbrt-v3: rayon's global pool, all cores).
-fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
+pub(crate) fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
     match threads.filter(|&n| n > 0) {
         Some(n) => {
             let pool = rayon::ThreadPoolBuilder::new()
@@ -166,7 +167,7 @@ fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -
 }
 
 /// Warns about Integrator parameters that the integrator did not read.
-fn report_unused(integrator: Option<&Named>, name: &str, set: &[(String, String)], warnings: &mut Warnings) {
+pub(crate) fn report_unused(integrator: Option<&Named>, name: &str, set: &[(String, String)], warnings: &mut Warnings) {
     if let Some(n) = integrator.filter(|n| n.name == name) {
         for p in n.params.unused() {
             // A parameter replaced by --set was not read because the command line won, not because it is unknown.
@@ -180,49 +181,4 @@ fn report_unused(integrator: Option<&Named>, name: &str, set: &[(String, String)
             }
         }
     }
-}
-
-/// The sample settings a cache-based render honours and the ones it cannot, said aloud: `--spp` (and
-/// `--quick`'s one sample per pixel) become the sub-pixel sample count unless `subpixels` is set; the scene's
-/// Sampler and PixelFilter, and the Film's `scale` and `maxsampleluminance`, are not used (the driver shades
-/// `subpixels` jittered positions per pixel and averages them), each with a warning where it was written.
-/// Returns the `--set` list with the honoured settings added.
-fn cache_sample_settings(
-    scene: &Scene,
-    params: &ParamList,
-    settings: &RenderSettings,
-    warnings: &mut Warnings,
-) -> Vec<(String, String)> {
-    let mut set = settings.set.clone();
-    let subpixels_set = params.get("subpixels").is_some() || set.iter().any(|(k, _)| k == "subpixels");
-    let wanted = settings.spp.map(|n| (n, "--spp")).or(settings.quick.then_some((1, "--quick")));
-    match wanted {
-        Some((n, flag)) if subpixels_set => warnings.general(format!(
-            "{flag} ({n} samples per pixel) is not used: \"subpixels\" is set and gives the sub-pixel sample count"
-        )),
-        Some((n, _)) => set.push(("subpixels".into(), n.to_string())),
-        None => {}
-    }
-    let per_pixel = "it shades \"subpixels\" jittered positions per pixel (set it, or --spp)";
-    if let Some(loc) = &scene.declared.sampler {
-        warnings
-            .at(loc, format!("Sampler \"{}\" is not used by cache-based integrators: {per_pixel}", scene.sampler.name));
-    }
-    let box_filter = scene.filter.kind == filter::FilterKind::Box && scene.filter.radius == [0.5, 0.5];
-    if let Some(loc) = scene.declared.filter.as_ref().filter(|_| !box_filter) {
-        warnings.at(
-            loc,
-            "PixelFilter is not used by cache-based integrators: the sub-pixel samples of a pixel are averaged (a box filter of radius 0.5)",
-        );
-    }
-    if scene.film.scale != 1.0 {
-        warnings.general(format!("Film \"scale\" {} is not applied by cache-based integrators", scene.film.scale));
-    }
-    if scene.film.max_sample_luminance.is_finite() {
-        warnings.general(format!(
-            "Film \"maxsampleluminance\" {} is not applied by cache-based integrators",
-            scene.film.max_sample_luminance
-        ));
-    }
-    set
 }

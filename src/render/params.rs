@@ -94,3 +94,53 @@ impl<'a> IntegratorParams<'a> {
         Ok(())
     }
 }
+
+/// One documented integrator parameter: the rows of `cachert render --help` and of the README's tables.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Parameter {
+    /// The name as written in the scene file and in `--set`.
+    pub name: &'static str,
+    /// The pbrt type word (`integer`, `float`, `string`, `bool`).
+    pub ty: &'static str,
+    /// The default, in words (Markdown: `code` in backquotes).
+    pub default: &'static str,
+    /// What it does (Markdown).
+    pub meaning: &'static str,
+}
+
+impl Parameter {
+    /// A table row.
+    pub const fn new(name: &'static str, ty: &'static str, default: &'static str, meaning: &'static str) -> Self {
+        Parameter { name, ty, default, meaning }
+    }
+}
+
+/// A parameter table as plain text: a `title` line, then one indented line per parameter.
+pub fn help_text(title: &str, params: &[Parameter]) -> String {
+    let mut out = format!("{title}\n");
+    let width = params.iter().map(|p| p.name.len() + p.ty.len() + 3).max().unwrap_or(0);
+    for p in params {
+        let head = format!("{} ({})", p.name, p.ty);
+        out.push_str(&format!(
+            "  {head:<width$}  {}; default {}\n",
+            p.meaning.replace('`', ""),
+            p.default.replace('`', "")
+        ));
+    }
+    out
+}
+
+/// A parameter table as the README writes it: header, rule and one Markdown row per parameter.
+pub fn markdown_table(params: &[Parameter]) -> String {
+    let mut out = String::from("| parameter | type | default | meaning |\n|---|---|---|---|\n");
+    for p in params {
+        out.push_str(&format!("| `{}` | {} | {} | {} |\n", p.name, p.ty, p.default, p.meaning));
+    }
+    out
+}
+
+/// An `f32` setting as JSON, written with its shortest decimal form (0.2, not 0.20000000298023224);
+/// `null` when not finite.
+pub fn json_f32(v: f32) -> serde_json::Value {
+    v.to_string().parse::<f64>().ok().filter(|x| x.is_finite()).map_or(serde_json::Value::Null, Into::into)
+}

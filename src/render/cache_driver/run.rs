@@ -1,6 +1,6 @@
 //! STAGE 6 (render): the one generic cache-based render driver (DESIGN.md §1, ALGORITHMS.md §0):
 //! G-buffer → first-stage placement → evaluate caches → second-stage placement (evaluating what it adds)
-//! → kd-tree → shade every sub-pixel sample from its selected caches. Or, for placement `none`, the
+//! → kd-tree → shade every sub-pixel sample from its selected caches. Or, for [`Placement::Reference`], the
 //! per-sample reference: the application's brute-force answer at every sub-pixel sample. Each step is timed
 //! as in the paper's Table 4.
 //!
@@ -13,36 +13,20 @@ use glam::Vec3A;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
-use crate::application::Application;
+use crate::application::{Application, Baseline, Neighbour};
 use crate::cache::{CacheIndex, GroupScratch};
 use crate::error::{Error, Result};
 use crate::gbuffer::{GBuffer, PixelId, shading_point};
 use crate::image::Image;
-use crate::placement::{CacheId, CacheOracle, PlacementParams, registry};
+use crate::placement::{CacheId, CacheOracle, registry};
 use crate::sampling::Rng;
 use crate::sampling::rng::{hash3, mix64};
 use crate::sampling::sequence::sobol02;
 use crate::scene::Scene;
 use crate::scene::ray::RayCounters;
 
-use super::cache_stats::{CacheStats, StageTimes, peak_memory_bytes};
-
-/// How a cache-based render is set up (the `cacheao` integrator's parameters, resolved).
-#[derive(Clone, Debug, PartialEq)]
-pub struct CacheSettings {
-    /// Strategy name (`vgc+dgs`, …) or `none` for the per-sample reference.
-    pub placement: String,
-    /// Total cache budget N_c.
-    pub caches: usize,
-    /// Placement parameters.
-    pub params: PlacementParams,
-    /// Sub-pixel samples per pixel (the same positions for every method and the reference).
-    pub subpixels: u32,
-    /// Seed of every random decision of placement and evaluation.
-    pub seed: u64,
-    /// Show progress bars.
-    pub progress: bool,
-}
+use super::settings::{CacheSettings, Placement};
+use super::stats::{CacheStats, StageTimes, peak_memory_bytes};
 
 /// What a cache-based render produced besides the image.
 #[derive(Clone, Debug)]
@@ -57,6 +41,10 @@ pub struct CachedOutput {
     pub stage2: Vec<PixelId>,
     /// The DGS discontinuity map, when the strategy made one (row-major, G-buffer size).
     pub discontinuity: Option<Vec<f32>>,
+    /// The resolved settings, generic and the application's, as the `--stats` report writes them.
+    pub settings: serde_json::Map<String, serde_json::Value>,
+    /// The per-pixel integrator computing the same image, if the application has one.
+    pub baseline: Option<Baseline>,
 }
 
 /// Stage tags of random streams.
@@ -153,7 +141,7 @@ pub fn render_cached<A: Application>(scene: &Scene, app: &A, s: &CacheSettings) 
     if g.valid_count == 0 {
         stats.notes.push("no pixel centre sees the scene: there is nothing to cache, the image is black".into());
     }
-    let none = s.placement == "none";
+    let none = s.placement == Placement::Reference;
     let mut stage1 = Vec::new();
     let mut stage2 = Vec::new();
     let mut discontinuity = None;
@@ -170,8 +158,9 @@ pub fn render_cached<A: Application>(scene: &Scene, app: &A, s: &CacheSettings) 
         rays: RayCounters::default(),
         bar: bar(s.progress, s.caches.min(g.valid_count) as u64, "caches"),
     };
-    if !none && g.valid_count > 0 {
-        let strategy = registry::strategy(&s.placement)?;
+    let mut cache_points = Vec::new();
+    if let (Placement::Strategy(name), true) = (s.placement, g.valid_count > 0) {
+        let strategy = registry::strategy(name)?;
         if s.caches == 0 {
             return Err(Error::usage("the cache budget \"caches\" must be at least 1"));
         }
@@ -209,15 +198,16 @@ pub fn render_cached<A: Application>(scene: &Scene, app: &A, s: &CacheSettings) 
         stage1 = store.sites[..stats.stage1_caches].to_vec();
         stage2 = store.sites[stats.stage1_caches..].to_vec();
         let t = Instant::now();
-        let points: Vec<(Vec3A, Vec3A)> =
+        cache_points =
             store.sites.iter().map(|&id| g.get(id).map_or((Vec3A::NAN, Vec3A::NAN), |p| (p.p, p.n))).collect();
-        let index = CacheIndex::new(&points, s.params.lookup, lambda).with_scene_diagonal(g.scene_diagonal);
+        let index = CacheIndex::new(&cache_points, s.params.lookup, lambda).with_scene_diagonal(g.scene_diagonal);
         times.kd_tree = t.elapsed().as_secs_f64();
         index_and_store = Some(index);
     }
     stats.cache_rays = store.rays;
     let t = Instant::now();
-    let (image, render_rays) = shade_image(scene, app, s, index_and_store.as_ref(), &store.records, none);
+    let caches = Caches { index: index_and_store.as_ref(), records: &store.records, points: &cache_points };
+    let (image, render_rays) = shade_image(scene, app, s, &caches, none);
     times.render = t.elapsed().as_secs_f64();
     stats.render_rays = render_rays;
     stats.total_caches = store.records.len();
@@ -225,7 +215,16 @@ pub fn render_cached<A: Application>(scene: &Scene, app: &A, s: &CacheSettings) 
     times.total = start.elapsed().as_secs_f64();
     stats.times = times;
     stats.peak_memory_bytes = peak_memory_bytes();
-    Ok(CachedOutput { image, stats, stage1, stage2, discontinuity })
+    let mut settings = s.to_json();
+    settings.extend(app.settings().into_iter().map(|(k, v)| (k.to_string(), v)));
+    Ok(CachedOutput { image, stats, stage1, stage2, discontinuity, settings, baseline: app.baseline() })
+}
+
+/// The evaluated caches as shading reads them: the lookup index, the records and each cache's (p, n).
+struct Caches<'a, R> {
+    index: Option<&'a CacheIndex>,
+    records: &'a [R],
+    points: &'a [(Vec3A, Vec3A)],
 }
 
 /// Shades every sub-pixel sample (box filter over the pixel): from the caches, or by the reference.
@@ -233,8 +232,7 @@ fn shade_image<A: Application>(
     scene: &Scene,
     app: &A,
     s: &CacheSettings,
-    index: Option<&CacheIndex>,
-    records: &[A::Record],
+    caches: &Caches<'_, A::Record>,
     reference: bool,
 ) -> (Image, RayCounters) {
     let b = scene.film.cropped_bounds();
@@ -271,14 +269,17 @@ fn shade_image<A: Application>(
                         let mut rng = Rng::keyed(s.seed, STAGE_SHADE, k);
                         add(col, app.reference(scene, &sp, &mut rng, &mut rays));
                     }
-                } else if let Some(index) = index {
+                } else if let Some(index) = caches.index {
                     queries.clear();
                     queries.extend(points.iter().map(|(_, _, sp)| (sp.p, sp.n)));
                     index.select_group_in(&queries, &mut lookup, |j, near| {
                         let (col, k, sp) = &points[j];
                         index.interpolate_weights(near, &mut weights);
                         blend.clear();
-                        blend.extend(weights.iter().map(|&(id, wt)| (&records[id as usize], wt)));
+                        blend.extend(weights.iter().map(|&(id, weight)| {
+                            let (p, n) = caches.points[id as usize];
+                            Neighbour { record: &caches.records[id as usize], p, n, weight }
+                        }));
                         if !blend.is_empty() {
                             let mut rng = Rng::keyed(s.seed, STAGE_SHADE, *k);
                             add(*col, app.shade(scene, sp, &blend, &mut rng, &mut rays));

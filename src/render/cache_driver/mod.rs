@@ -1,0 +1,135 @@
+//! STAGE 6 (render): the cache driver — every cache-based integrator, whatever its application, renders
+//! through here. [`render_with`] reads the generic parameters ([`settings::PARAMETERS`]) and the
+//! application's own (`Application::from_params`), names the scene settings a cache render cannot use, runs
+//! the generic driver ([`run::render_cached`]) and reports; `render::render` reaches it through the
+//! application registry by name ([`CacheRender`]), and a test can call it with an application of its own.
+//!
+//! Depends on `application` (the trait and registry), `placement`, `cache`, `gbuffer` and `scene`; no module
+//! here names a particular application.
+
+pub mod run;
+pub mod settings;
+pub mod stats;
+
+pub use run::{CachedOutput, render_cached};
+pub use settings::{CacheOverrides, CacheSettings, PARAMETERS, Placement};
+
+use crate::application::Application;
+use crate::application::registry::{APPLICATIONS, WithApplication};
+use crate::error::{Result, Warnings};
+use crate::parse::{Named, ParamList};
+use crate::scene::{Scene, filter};
+
+use super::params::{IntegratorParams, help_text};
+use super::{RenderOutput, RenderSettings, report_unused, with_threads};
+
+/// Renders `scene` with cache application `A`: the scene's `Integrator` parameters (when it names `A`)
+/// and `settings.set` give both the generic and `A`'s parameters; `settings.cache` wins over them.
+pub fn render_with<A: Application>(
+    scene: &Scene,
+    integrator: Option<&Named>,
+    settings: &RenderSettings,
+    warnings: &mut Warnings,
+) -> Result<RenderOutput> {
+    let empty = ParamList::default();
+    let params = match integrator {
+        Some(n) if n.name == A::NAME => &n.params,
+        _ => &empty,
+    };
+    let overrides = cache_sample_settings(scene, params, settings, warnings);
+    let p = IntegratorParams::new(params, &settings.set);
+    let cs = CacheSettings::from_params(&p, &overrides, scene, A::NAME, settings.seed, settings.progress)?;
+    let app = A::from_params(&p, scene)?;
+    p.check_overrides(A::NAME)?;
+    report_unused(integrator, A::NAME, &settings.set, warnings);
+    let run = || render_cached(scene, &app, &cs);
+    let out = with_threads(settings.threads, run)??;
+    let mut rays = out.stats.cache_rays;
+    rays.add(&out.stats.render_rays);
+    Ok(RenderOutput {
+        image: out.image.clone(),
+        rays,
+        render_secs: out.stats.times.total,
+        spp: cs.subpixels,
+        integrator: format!("{}, placement {}", A::NAME, cs.placement),
+        cache: Some(Box::new(out)),
+    })
+}
+
+/// [`render_with`] as a registry visitor: `render::render` dispatches an integrator name through it.
+pub struct CacheRender<'a, 'w> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// The scene's `Integrator` directive.
+    pub integrator: Option<&'a Named>,
+    /// Render settings.
+    pub settings: &'a RenderSettings,
+    /// Where warnings go.
+    pub warnings: &'w mut Warnings,
+}
+
+impl WithApplication for CacheRender<'_, '_> {
+    type Output = Result<RenderOutput>;
+    fn apply<A: Application>(self) -> Result<RenderOutput> {
+        render_with::<A>(self.scene, self.integrator, self.settings, self.warnings)
+    }
+}
+
+/// The parameter tables of every cache-based integrator as plain text (`cachert render --help`).
+pub fn help() -> String {
+    let mut out = help_text(
+        "Parameters of every cache-based integrator (in the scene's Integrator line, or --set NAME=VALUE):",
+        PARAMETERS,
+    );
+    for e in APPLICATIONS {
+        out.push('\n');
+        out.push_str(&help_text(&format!("{} ({}), its own parameters:", e.name, e.about), e.parameters));
+    }
+    out.push_str("(L is the diagonal of the scene's bounding box.)\n");
+    out
+}
+
+/// The sample settings a cache-based render honours and the ones it cannot, said aloud: `--spp` (and
+/// `--quick`'s one sample per pixel) become the sub-pixel sample count unless `subpixels` is set; the scene's
+/// Sampler and PixelFilter, and the Film's `scale` and `maxsampleluminance`, are not used (the driver shades
+/// `subpixels` jittered positions per pixel and averages them), each with a warning where it was written.
+/// Returns `settings.cache` with the honoured sub-pixel count added.
+fn cache_sample_settings(
+    scene: &Scene,
+    params: &ParamList,
+    settings: &RenderSettings,
+    warnings: &mut Warnings,
+) -> CacheOverrides {
+    let mut o = settings.cache;
+    let subpixels_set = params.get("subpixels").is_some() || settings.set.iter().any(|(k, _)| k == "subpixels");
+    let wanted = settings.spp.map(|n| (n, "--spp")).or(settings.quick.then_some((1, "--quick")));
+    match wanted {
+        Some((n, flag)) if subpixels_set => warnings.general(format!(
+            "{flag} ({n} samples per pixel) is not used: \"subpixels\" is set and gives the sub-pixel sample count"
+        )),
+        Some((n, _)) => o.subpixels = Some(n),
+        None => {}
+    }
+    let per_pixel = "it shades \"subpixels\" jittered positions per pixel (set it, or --spp)";
+    if let Some(loc) = &scene.declared.sampler {
+        warnings
+            .at(loc, format!("Sampler \"{}\" is not used by cache-based integrators: {per_pixel}", scene.sampler.name));
+    }
+    let box_filter = scene.filter.kind == filter::FilterKind::Box && scene.filter.radius == [0.5, 0.5];
+    if let Some(loc) = scene.declared.filter.as_ref().filter(|_| !box_filter) {
+        warnings.at(
+            loc,
+            "PixelFilter is not used by cache-based integrators: the sub-pixel samples of a pixel are averaged (a box filter of radius 0.5)",
+        );
+    }
+    if scene.film.scale != 1.0 {
+        warnings.general(format!("Film \"scale\" {} is not applied by cache-based integrators", scene.film.scale));
+    }
+    if scene.film.max_sample_luminance.is_finite() {
+        warnings.general(format!(
+            "Film \"maxsampleluminance\" {} is not applied by cache-based integrators",
+            scene.film.max_sample_luminance
+        ));
+    }
+    o
+}
