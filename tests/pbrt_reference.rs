@@ -107,9 +107,9 @@ fn bathroom_renders_with_missing_textures() {
     let warnings: Vec<String> = loaded.warnings.iter().map(|w| w.to_string()).collect();
     for file in missing.lines().map(str::trim).filter(|l| !l.is_empty()) {
         assert!(
-            warnings.iter().any(|w| w.contains("cannot read image")
-                && w.contains(&format!("/{file}\";"))
-                && w.contains("grey")),
+            warnings
+                .iter()
+                .any(|w| w.contains("cannot read image") && w.contains(&format!("/{file}\";")) && w.contains("grey")),
             "no warning for missing {file}; warnings: {warnings:#?}"
         );
     }

@@ -58,6 +58,41 @@ pub struct BenchArgs {
     /// Write the table as JSON to this file as well.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// The integrator timed: `ambientocclusion` (rows per `--nsamples`), or `directlighting` / `path`
+    /// (pbrt-v3's defaults, maxdepth 5; rows per `--spp`) on the scenes that have a light
+    /// (Cornell box, veach-mis, staircase2).
+    #[arg(long, default_value = "ambientocclusion")]
+    pub integrator: String,
+    /// Pixel samples of the `directlighting` / `path` rows (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "16")]
+    pub spp: Vec<u32>,
+}
+
+/// The scenes `directlighting` and `path` are timed on (the bench scenes with light sources).
+const SHADED_SCENES: [&str; 3] = ["bitterli-cornell-box-v3", "pbrtv3scenes-veach-mis", "bitterli-staircase2"];
+
+/// The `Integrator` line of a shading bench row.
+fn shading_integrator_line(name: &str) -> Result<&'static str> {
+    match name {
+        "directlighting" => Ok("Integrator \"directlighting\" \"integer maxdepth\" [5]"),
+        "path" => Ok("Integrator \"path\" \"integer maxdepth\" [5]"),
+        other => {
+            Err(Error::usage(format!("--integrator {other}: the bench times ambientocclusion, directlighting or path")))
+        }
+    }
+}
+
+/// `text` (an `ao-ref.pbrt`: 16 random-sampler pixel samples, box filter) with its Integrator line replaced
+/// by `integrator` and its pixel samples set to `spp`.
+fn with_integrator(text: &str, integrator: &str, spp: u32, file: &Path) -> Result<String> {
+    let from = "\"integer pixelsamples\" [16]";
+    let Some(line) = text.lines().find(|l| l.starts_with("Integrator ")) else {
+        return Err(Error::usage(format!("{}: no Integrator line to replace", file.display())));
+    };
+    if !text.contains(from) {
+        return Err(Error::usage(format!("{}: no `{from}` to replace", file.display())));
+    }
+    Ok(text.replacen(line, integrator, 1).replacen(from, &format!("\"integer pixelsamples\" [{spp}]"), 1))
 }
 
 /// One row of the bench table.
@@ -65,7 +100,9 @@ pub struct BenchArgs {
 pub struct BenchRow {
     /// Scene folder name.
     pub scene: String,
-    /// AO rays per camera sample.
+    /// The integrator timed.
+    pub integrator: String,
+    /// AO rays per camera sample (`ambientocclusion`), or pixel samples (`directlighting`, `path`).
     pub nsamples: u32,
     /// Worker threads.
     pub threads: usize,
@@ -178,6 +215,34 @@ pub fn run(args: &BenchArgs) -> Result<String> {
         None => None,
     };
     let mut rows = Vec::new();
+    if args.integrator != "ambientocclusion" {
+        let line = shading_integrator_line(&args.integrator)?;
+        if args.spp.contains(&0) {
+            return Err(Error::usage("--spp: sample counts must be at least 1"));
+        }
+        for name in SHADED_SCENES {
+            if args.only.as_deref().is_some_and(|o| !name.contains(o)) {
+                continue;
+            }
+            let dir = args.scenes.join(name);
+            let file = dir.join("ao-ref.pbrt");
+            let text = std::fs::read_to_string(&file).map_err(|e| Error::file(&file, e.to_string()))?;
+            for &spp in &args.spp {
+                let text = with_integrator(&text, line, spp, &file)?;
+                let (mut row, _) = bench_cachert(name, &text, &file, spp, args)?;
+                if let Some(p) = &pbrt {
+                    let secs = run_pbrt(p, &text, &dir, args.nthreads)?;
+                    row.pbrt_cpu_s = Some(secs);
+                    row.pbrt_source = Some("measured".into());
+                    row.speedup = Some(secs / row.cpu_s);
+                    row.cpu_fraction = Some(row.cpu_s / secs);
+                }
+                eprintln!("{}", format_row(&row));
+                rows.push(row);
+            }
+        }
+        return finish(rows, args);
+    }
     for (name, recorded) in PBRT_V3_CPU_SECS {
         if args.only.as_deref().is_some_and(|o| !name.contains(o)) {
             continue;
@@ -209,6 +274,11 @@ pub fn run(args: &BenchArgs) -> Result<String> {
             rows.push(row);
         }
     }
+    finish(rows, args)
+}
+
+/// Writes `--json` and returns the table.
+fn finish(rows: Vec<BenchRow>, args: &BenchArgs) -> Result<String> {
     if let Some(path) = &args.json {
         let json = serde_json::to_string_pretty(&rows).map_err(|e| Error::usage(format!("JSON: {e}")))?;
         crate::image::write_bytes(path, json.as_bytes())?;
@@ -248,6 +318,7 @@ fn bench_cachert(
     let mrays = r.rays.total() as f64 / 1e6;
     let row = BenchRow {
         scene: name.into(),
+        integrator: args.integrator.clone(),
         nsamples: n,
         threads: args.nthreads,
         load_cpu_s: load_cpu,
@@ -295,7 +366,7 @@ fn table(rows: &[BenchRow], threads: usize) -> String {
         out,
         "{:<28} {:>5} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>10} {:>8} {:>7} {:>8} {:>10}",
         "scene",
-        "rays",
+        "rays|spp",
         "Mrays",
         "wall s",
         "load cpu",
@@ -315,7 +386,8 @@ fn table(rows: &[BenchRow], threads: usize) -> String {
         out,
         "cpu s = load + render CPU seconds, as pbrt-v3's whole-process figure; speedup = pbrt-v3 CPU / cachert CPU \
          (target ≥ 2); fract = cachert CPU / pbrt-v3 CPU; scaling = 1-thread wall / {threads}-thread wall; \
-         rmse/floor = RMSE to ao-ref.pfm over the noise model's expected RMSE at that ray count"
+         rmse/floor = RMSE to ao-ref.pfm over the noise model's expected RMSE at that ray count (AO only); \
+         rays|spp = AO rays per camera sample, or pixel samples for directlighting and path"
     );
     out
 }
@@ -330,6 +402,19 @@ mod tests {
         let out = with_nsamples(t, 16, Path::new("x.pbrt")).unwrap();
         assert!(out.contains("\"integer nsamples\" [16]") && !out.contains("[256]"));
         assert!(with_nsamples("WorldBegin\n", 16, Path::new("x.pbrt")).is_err());
+    }
+
+    #[test]
+    fn the_integrator_and_sample_count_are_replaced() {
+        let t = "Integrator \"ambientocclusion\" \"integer nsamples\" [256]\nSampler \"random\" \"integer pixelsamples\" [16]\n";
+        let line = shading_integrator_line("path").unwrap();
+        let out = with_integrator(t, line, 4, Path::new("x.pbrt")).unwrap();
+        assert_eq!(
+            out,
+            "Integrator \"path\" \"integer maxdepth\" [5]\nSampler \"random\" \"integer pixelsamples\" [4]\n"
+        );
+        assert!(shading_integrator_line("bdpt").is_err());
+        assert!(with_integrator("WorldBegin\n", line, 4, Path::new("x.pbrt")).is_err());
     }
 
     #[test]

@@ -114,39 +114,15 @@ pub fn estimate_direct(
     if f == Spectrum::ZERO || bs.pdf <= 0.0 {
         return ld;
     }
-    let sampled_specular = bs.sampled.contains(BxdfFlags::SPECULAR);
-    let ray = x.si.spawn_ray(bs.wi);
-    c.camera += 1;
-    let li = match scene.geometry.intersect(&ray) {
-        Some(hit) => {
-            if sh.lights.light_of_hit(&hit) != Some(light) {
-                return ld;
-            }
-            let weight = if sampled_specular {
-                1.0
-            } else {
-                let light_pdf = sh.lights.pdf_li_hit(light, x.si, &hit);
-                if light_pdf == 0.0 {
-                    return ld;
-                }
-                power_heuristic(bs.pdf, light_pdf)
-            };
-            sh.lights.emitted(&hit, -bs.wi) * weight
-        }
-        None => {
-            let weight = if sampled_specular {
-                1.0
-            } else {
-                let light_pdf = sh.lights.pdf_li(light, x.si, bs.wi);
-                if light_pdf == 0.0 {
-                    return ld;
-                }
-                power_heuristic(bs.pdf, light_pdf)
-            };
-            sh.lights.le_escaped_by(light, &ray) * weight
-        }
-    };
-    ld + f * li / bs.pdf
+    // The specular lobes are excluded above, so the sample is weighted against the light's density. The
+    // light is asked first: most directions miss a small light and need no traversal at all (see
+    // `Lights::hit_by`); a direction that meets it is kept when nothing else is in between.
+    let Some(h) = sh.lights.hit_by(light, x.si, bs.wi) else { return ld };
+    c.shadow += 1;
+    if scene.geometry.occluded_from(&h.shadow, x.si.origin) {
+        return ld;
+    }
+    ld + f * h.li * power_heuristic(bs.pdf, h.pdf) / bs.pdf
 }
 
 /// pbrt-v3 `UniformSampleAllLights`: every light, with `counts[j]` samples each (arrays of the sampler).

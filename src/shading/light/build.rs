@@ -239,7 +239,7 @@ impl<'a> Lights<'a> {
                             continue;
                         }
                         self.slots.push(self.entries.len() as u32);
-                        let kind = Kind::Triangle { area: a as u32, mesh: mi, tri: tri as u32 };
+                        let kind = Kind::Triangle { area: a as u32, mesh: mi, tri: tri as u32, tri_area: area };
                         self.entries.push(Entry { kind, power: em.power(area), samples });
                     }
                 }
