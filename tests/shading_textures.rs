@@ -3,8 +3,8 @@
 //! Each scene in `tests/data/pbrt-v3/textures` is one textured matte square filling an orthographic
 //! 64×64 view, lit by a distant light of radiance π along the view direction; pbrt-v3's `directlighting`
 //! rendered it twice (`make.sh`): `-a` with 256 random samples per pixel, `-b` with a stratified 16×16
-//! jittered sampler. cachert has no per-pixel shading integrator yet, so the test forms the closed form
-//! directly: for 610 lattice points in each pixel it traces cachert's camera ray, intersects the
+//! jittered sampler. The test does not go through cachert's integrators: it forms the closed form
+//! directly, isolating the textures: for 610 lattice points in each pixel it traces cachert's camera ray, intersects the
 //! square, evaluates the texture at the hit and takes Kd·L·|cos θ|/π (pbrt-v3's Lambertian clamps Kd at 0).
 //! The pixel means must match pbrt-v3's `-a` image within its noise, RMSE(ours, a) ≤ 1.3·RMSE(a, b)
 //! (the two references' disagreement bounds a's noise from above), and the image mean within 1 %.

@@ -1,6 +1,6 @@
 //! STAGE 5 (shading): choosing one light per sample — pbrt-v3's `lightsamplestrategy` "uniform" (every
-//! light equally likely) and "power" (probability ∝ the luminance of `Power()`). pbrt-v3's "spatial"
-//! (per-voxel power estimates) falls back to "power" here, and says so in [`LightSelect::note`].
+//! light equally likely) and "power" (probability ∝ the luminance of `Power()`). pbrt-v3's "spatial" is
+//! [`super::SpatialSelect`]; asked for here, it falls back to "power" and says so in [`LightSelect::note`].
 //!
 //! Depends only on [`super::Lights`] and [`super::distribution`].
 
