@@ -164,26 +164,40 @@ impl<'a> Lights<'a> {
     /// nothing (zero pdf, zero radiance, the back of a one-sided emitter, `si` at the light's point).
     #[inline]
     pub fn sample_li(&self, light: usize, si: &SurfaceInteraction, u: [f32; 2]) -> Option<LightSample> {
+        self.sample_li_with::<true>(light, si, u)
+    }
+
+    /// [`Lights::sample_li`] without its shadow ray when `SHADOW` is false (the ray is then a placeholder):
+    /// for estimates that ignore visibility, such as the spatial light distribution.
+    #[inline]
+    pub(crate) fn sample_li_with<const SHADOW: bool>(
+        &self,
+        light: usize,
+        si: &SurfaceInteraction,
+        u: [f32; 2],
+    ) -> Option<LightSample> {
+        let to = |sp: &SurfacePoint| if SHADOW { spawn_ray_to(si, sp) } else { Ray::new(si.p, Vec3A::Z) };
+        let along = |w: Vec3A| if SHADOW { si.spawn_ray(w) } else { Ray::new(si.p, Vec3A::Z) };
         let e = &self.entries[light];
         let (li, wi, pdf, shadow) = match e.kind {
             Kind::Point(l) => {
                 let (li, wi) = l.li(si.p)?;
-                (li, wi, 1.0, spawn_ray_to(si, &SurfacePoint { p: l.p, p_error: Vec3A::ZERO, n: Vec3A::ZERO }))
+                (li, wi, 1.0, to(&SurfacePoint { p: l.p, p_error: Vec3A::ZERO, n: Vec3A::ZERO }))
             }
             Kind::Spot(l) => {
                 let (li, wi) = l.li(si.p)?;
-                (li, wi, 1.0, spawn_ray_to(si, &SurfacePoint { p: l.p, p_error: Vec3A::ZERO, n: Vec3A::ZERO }))
+                (li, wi, 1.0, to(&SurfacePoint { p: l.p, p_error: Vec3A::ZERO, n: Vec3A::ZERO }))
             }
-            Kind::Distant(l) => (l.l, l.w, 1.0, si.spawn_ray(l.w)),
+            Kind::Distant(l) => (l.l, l.w, 1.0, along(l.w)),
             Kind::Infinite(i) => {
                 let (li, wi, pdf) = self.infinite[i as usize].sample(u)?;
-                (li, wi, pdf, si.spawn_ray(wi))
+                (li, wi, pdf, along(wi))
             }
             Kind::Triangle { area, mesh, tri, tri_area } => {
                 let sp = area::sample_triangle(&self.geometry.meshes[mesh as usize], tri as usize, u);
                 let pdf = shape_sampler::solid_angle_factor(si.p, &sp)? / tri_area;
                 let wi = (sp.p - si.p).normalize();
-                (self.emission[area as usize].l(sp.n, -wi), wi, pdf, spawn_ray_to(si, &sp))
+                (self.emission[area as usize].l(sp.n, -wi), wi, pdf, to(&sp))
             }
             Kind::Shape { area, quadric, sampler } => {
                 let q = &self.geometry.accel.quadrics[quadric as usize];
@@ -193,7 +207,7 @@ impl<'a> Lights<'a> {
                     return None;
                 }
                 let wi = d.normalize();
-                (self.emission[area as usize].l(sp.n, -wi), wi, pdf, spawn_ray_to(si, &sp))
+                (self.emission[area as usize].l(sp.n, -wi), wi, pdf, to(&sp))
             }
         };
         if !(pdf > 0.0 && pdf.is_finite()) || li == Spectrum::ZERO || !wi.is_finite() {

@@ -82,7 +82,7 @@ impl SpatialSelect {
             let at = point_interaction(p0 + t * size);
             let u = [radical_inverse(7, i), radical_inverse(11, i)];
             for (j, c) in contrib.iter_mut().enumerate() {
-                if let Some(ls) = lights.sample_li(j, &at, u)
+                if let Some(ls) = lights.sample_li_with::<false>(j, &at, u)
                     && ls.pdf > 0.0
                 {
                     let y = luminance(ls.li) / ls.pdf;
