@@ -35,8 +35,8 @@ pub struct Shading<'a> {
 }
 
 impl<'a> Shading<'a> {
-    /// Prepares the shading data of `scene`; a scene without lights gets a warning (its image is black
-    /// except for nothing at all — pbrt-v3 renders it black too).
+    /// Prepares the shading data of `scene`; a scene without lights gets a warning (its image is black, as
+    /// pbrt-v3's is).
     pub fn build(scene: &'a Scene, multiple_lobes: bool, warnings: &mut Warnings) -> Result<Shading<'a>> {
         let textures = Textures::build(scene, warnings)?;
         let materials = Materials::build(scene, warnings)?;
