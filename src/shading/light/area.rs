@@ -51,11 +51,18 @@ pub fn triangle_area(mesh: &TriangleMesh, tri: usize) -> f32 {
     0.5 * (p1 - p0).cross(p2 - p0).length()
 }
 
-/// The emitting-side normal at barycentrics (b0, b1) of triangle `tri` (pbrt-v3's rule, see the module doc).
+/// The unit normal of triangle `tri`'s plane, (p1 − p0) × (p2 − p0) normalised (zero when degenerate); lights
+/// compute it once and pass it to [`sample_triangle`] and [`intersect_triangle`].
 #[inline]
-fn triangle_normal(mesh: &TriangleMesh, tri: usize, b0: f32, b1: f32) -> Vec3A {
+pub fn face_normal(mesh: &TriangleMesh, tri: usize) -> Vec3A {
     let [p0, p1, p2] = mesh.triangle(tri).map(Vec3A::from);
-    let n = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+    (p1 - p0).cross(p2 - p0).normalize_or_zero()
+}
+
+/// The emitting-side normal at barycentrics (b0, b1) of triangle `tri` with face normal `n` (pbrt-v3's rule,
+/// see the module doc).
+#[inline]
+fn triangle_normal(mesh: &TriangleMesh, tri: usize, n: Vec3A, b0: f32, b1: f32) -> Vec3A {
     if !mesh.normals.is_empty() {
         let idx = &mesh.indices[3 * tri..3 * tri + 3];
         let v = |k: usize| Vec3A::from(mesh.normals[idx[k] as usize]);
@@ -70,19 +77,19 @@ fn triangle_normal(mesh: &TriangleMesh, tri: usize, b0: f32, b1: f32) -> Vec3A {
 
 /// A point uniformly distributed by area on triangle `tri` for sample `u` (pdf = 1/area).
 #[inline]
-pub fn sample_triangle(mesh: &TriangleMesh, tri: usize, u: [f32; 2]) -> SurfacePoint {
+pub fn sample_triangle(mesh: &TriangleMesh, tri: usize, n: Vec3A, u: [f32; 2]) -> SurfacePoint {
     let su0 = u[0].sqrt();
     let (b0, b1) = (1.0 - su0, u[1] * su0);
     let b2 = 1.0 - b0 - b1;
     let [p0, p1, p2] = mesh.triangle(tri).map(Vec3A::from);
     let p = b0 * p0 + b1 * p1 + b2 * p2;
     let abs_sum = (b0 * p0).abs() + (b1 * p1).abs() + (b2 * p2).abs();
-    SurfacePoint { p, p_error: abs_sum * gamma(6), n: triangle_normal(mesh, tri, b0, b1) }
+    SurfacePoint { p, p_error: abs_sum * gamma(6), n: triangle_normal(mesh, tri, n, b0, b1) }
 }
 
 /// Where `ray` first crosses triangle `tri` (either side), with the emitting-side normal there.
 #[inline]
-pub fn intersect_triangle(mesh: &TriangleMesh, tri: usize, ray: &Ray) -> Option<SurfacePoint> {
+pub fn intersect_triangle(mesh: &TriangleMesh, tri: usize, n: Vec3A, ray: &Ray) -> Option<SurfacePoint> {
     let [p0, p1, p2] = mesh.triangle(tri).map(Vec3A::from);
     let (e1, e2) = (p1 - p0, p2 - p0);
     let pv = ray.d.cross(e2);
@@ -104,7 +111,7 @@ pub fn intersect_triangle(mesh: &TriangleMesh, tri: usize, ray: &Ray) -> Option<
     }
     let b0 = 1.0 - b1 - b2;
     let p = b0 * p0 + b1 * p1 + b2 * p2;
-    Some(SurfacePoint { p, p_error: Vec3A::ZERO, n: triangle_normal(mesh, tri, b0, b1) })
+    Some(SurfacePoint { p, p_error: Vec3A::ZERO, n: triangle_normal(mesh, tri, n, b0, b1) })
 }
 
 #[cfg(test)]
@@ -126,25 +133,34 @@ mod tests {
         let m = quad_tri(false, false);
         assert!((triangle_area(&m, 0) - 0.5).abs() < 1e-6);
         for i in 0..50 {
-            let s = sample_triangle(&m, 0, [(i as f32 + 0.5) / 50.0, ((i * 7) % 50) as f32 / 50.0]);
+            let s = sample_triangle(&m, 0, face_normal(&m, 0), [(i as f32 + 0.5) / 50.0, ((i * 7) % 50) as f32 / 50.0]);
             assert!(s.p.z == 0.0 && s.p.x >= 0.0 && s.p.y >= 0.0 && s.p.x + s.p.y <= 1.0 + 1e-6);
             assert_eq!(s.n, Vec3A::Z);
         }
-        assert_eq!(sample_triangle(&quad_tri(false, true), 0, [0.3, 0.3]).n, -Vec3A::Z);
+        assert_eq!(
+            sample_triangle(&quad_tri(false, true), 0, face_normal(&quad_tri(false, true), 0), [0.3, 0.3]).n,
+            -Vec3A::Z
+        );
         // With normals, the normals decide (and ReverseOrientation does not), as in pbrt-v3.
-        assert_eq!(sample_triangle(&quad_tri(true, false), 0, [0.3, 0.3]).n, -Vec3A::Z);
-        assert_eq!(sample_triangle(&quad_tri(true, true), 0, [0.3, 0.3]).n, -Vec3A::Z);
+        assert_eq!(
+            sample_triangle(&quad_tri(true, false), 0, face_normal(&quad_tri(true, false), 0), [0.3, 0.3]).n,
+            -Vec3A::Z
+        );
+        assert_eq!(
+            sample_triangle(&quad_tri(true, true), 0, face_normal(&quad_tri(true, true), 0), [0.3, 0.3]).n,
+            -Vec3A::Z
+        );
     }
 
     #[test]
     fn rays_find_the_triangle_from_both_sides() {
         let m = quad_tri(false, false);
         let r = Ray::new(Vec3A::new(0.2, 0.2, 1.0), -Vec3A::Z);
-        let h = intersect_triangle(&m, 0, &r).unwrap();
+        let h = intersect_triangle(&m, 0, face_normal(&m, 0), &r).unwrap();
         assert!((h.p - Vec3A::new(0.2, 0.2, 0.0)).length() < 1e-6);
         let r = Ray::new(Vec3A::new(0.2, 0.2, -1.0), Vec3A::Z);
-        assert!(intersect_triangle(&m, 0, &r).is_some());
+        assert!(intersect_triangle(&m, 0, face_normal(&m, 0), &r).is_some());
         let r = Ray::new(Vec3A::new(0.8, 0.8, 1.0), -Vec3A::Z);
-        assert!(intersect_triangle(&m, 0, &r).is_none());
+        assert!(intersect_triangle(&m, 0, face_normal(&m, 0), &r).is_none());
     }
 }

@@ -239,7 +239,8 @@ impl<'a> Lights<'a> {
                             continue;
                         }
                         self.slots.push(self.entries.len() as u32);
-                        let kind = Kind::Triangle { area: a as u32, mesh: mi, tri: tri as u32, tri_area: area };
+                        let n_face = super::area::face_normal(mesh, tri);
+                        let kind = Kind::Triangle { area: a as u32, mesh: mi, tri: tri as u32, tri_area: area, n_face };
                         self.entries.push(Entry { kind, power: em.power(area), samples });
                     }
                 }

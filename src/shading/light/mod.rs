@@ -65,12 +65,14 @@ enum Kind {
     Distant(DistantLight),
     /// Index into `Lights::infinite`.
     Infinite(u32),
-    /// Triangle `tri` of world mesh `mesh`, emitting as scene area light `area`; `tri_area` is its area.
+    /// Triangle `tri` of world mesh `mesh`, emitting as scene area light `area`; `tri_area` is its area and
+    /// `n_face` its unit face normal ([`area::face_normal`]).
     Triangle {
         area: u32,
         mesh: u32,
         tri: u32,
         tri_area: f32,
+        n_face: Vec3A,
     },
     /// Analytic shape `quadric`, emitting as scene area light `area`.
     Shape {
@@ -193,8 +195,8 @@ impl<'a> Lights<'a> {
                 let (li, wi, pdf) = self.infinite[i as usize].sample(u)?;
                 (li, wi, pdf, along(wi))
             }
-            Kind::Triangle { area, mesh, tri, tri_area } => {
-                let sp = area::sample_triangle(&self.geometry.meshes[mesh as usize], tri as usize, u);
+            Kind::Triangle { area, mesh, tri, tri_area, n_face } => {
+                let sp = area::sample_triangle(&self.geometry.meshes[mesh as usize], tri as usize, n_face, u);
                 let pdf = shape_sampler::solid_angle_factor(si.p, &sp)? / tri_area;
                 let wi = (sp.p - si.p).normalize();
                 (self.emission[area as usize].l(sp.n, -wi), wi, pdf, to(&sp))
@@ -234,9 +236,9 @@ impl<'a> Lights<'a> {
                 let l = &self.infinite[i as usize];
                 (l.le(wi), l.pdf(wi), si.spawn_ray(wi))
             }
-            Kind::Triangle { area, mesh, tri, tri_area } => {
+            Kind::Triangle { area, mesh, tri, tri_area, n_face } => {
                 let m = &self.geometry.meshes[mesh as usize];
-                let sp = area::intersect_triangle(m, tri as usize, &si.spawn_ray(wi))?;
+                let sp = area::intersect_triangle(m, tri as usize, n_face, &si.spawn_ray(wi))?;
                 let pdf = shape_sampler::solid_angle_factor(si.p, &sp)? / tri_area;
                 (self.emission[area as usize].l(sp.n, -wi), pdf, spawn_ray_to(si, &sp))
             }
@@ -263,10 +265,10 @@ impl<'a> Lights<'a> {
         match self.entries[light].kind {
             Kind::Point(_) | Kind::Spot(_) | Kind::Distant(_) => 0.0,
             Kind::Infinite(i) => self.infinite[i as usize].pdf(wi),
-            Kind::Triangle { mesh, tri, tri_area, .. } => {
+            Kind::Triangle { mesh, tri, tri_area, n_face, .. } => {
                 let m = &self.geometry.meshes[mesh as usize];
                 let ray = si.spawn_ray(wi);
-                match area::intersect_triangle(m, tri as usize, &ray) {
+                match area::intersect_triangle(m, tri as usize, n_face, &ray) {
                     Some(h) => shape_sampler::solid_angle_factor(si.p, &h).map_or(0.0, |f| f / tri_area),
                     None => 0.0,
                 }
