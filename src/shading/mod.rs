@@ -13,3 +13,9 @@ pub mod texture;
 
 /// A linear RGB colour (pbrt-v3's `RGBSpectrum`; the film keeps RGB).
 pub type Spectrum = glam::Vec3A;
+
+/// pbrt-v3's `RGBSpectrum::y`: the luminance of a linear RGB colour.
+#[inline]
+pub fn luminance(c: Spectrum) -> f32 {
+    0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z
+}

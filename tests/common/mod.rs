@@ -119,19 +119,7 @@ pub fn assert_matches_pbrt_pair(name: &str, ours: &Image, a_path: &Path, b_path:
     let a = cachert::image::read(a_path).unwrap_or_else(|e| panic!("{name}: reference a: {e}"));
     let b = cachert::image::read(b_path).unwrap_or_else(|e| panic!("{name}: reference b: {e}"));
     let floor = cachert::metrics::rmse(&b, &a).expect("the references have one size");
-    let err = cachert::metrics::rmse(ours, &a).unwrap_or_else(|e| panic!("{name}: {e}"));
-    let (m_ours, m_theirs) = (mean(ours), mean(&a));
-    let dev = (m_ours - m_theirs).abs() / m_theirs;
-    if let Some(dump) = std::env::var_os("CACHERT_DUMP_DIR") {
-        cachert::image::write(ours, &Path::new(&dump).join(format!("{name}-ours.pfm"))).expect("dump");
-    }
-    eprintln!(
-        "{name}: RMSE {err:.4}, pbrt-v3 floor {floor:.4}, ratio {:.3}; mean {m_ours:.4} vs {m_theirs:.4} ({:.3} %)",
-        err / floor,
-        100.0 * dev
-    );
-    assert!(err <= 1.3 * floor, "{name}: RMSE {err} is {:.2}× pbrt-v3's noise floor {floor}", err / floor);
-    assert!(dev <= 0.005, "{name}: mean {m_ours} vs pbrt-v3's {m_theirs}");
+    assert_within_floor(name, ours, &a, floor, 0.005);
 }
 
 /// Loads `<dir>/<scene>.pbrt` (no warnings allowed), renders it with seed 4 and checks it against
@@ -183,19 +171,25 @@ pub fn assert_matches_pbrt_single(
     mean_tol: f64,
 ) {
     let sigma = cachert::metrics::rmse(a, b).expect("same size") / 2f64.sqrt();
-    let floor = sigma * (1.0 + 1.0 / ref_per_ours).sqrt();
-    let err = cachert::metrics::rmse(a, reference).unwrap_or_else(|e| panic!("{name}: {e}"));
-    let (m_ours, m_theirs) = (mean(a), mean(reference));
+    assert_within_floor(name, a, reference, sigma * (1.0 + 1.0 / ref_per_ours).sqrt(), mean_tol);
+}
+
+/// Asserts that `ours` is finite, within 1.3 × `floor` of `reference` in RMSE and within `mean_tol`
+/// (relative) of its mean, printing the figures. With the environment variable `CACHERT_DUMP_DIR` set,
+/// `ours` is also written there as `<name>-ours.pfm` for inspection.
+fn assert_within_floor(name: &str, ours: &Image, reference: &Image, floor: f64, mean_tol: f64) {
+    let err = cachert::metrics::rmse(ours, reference).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let (m_ours, m_theirs) = (mean(ours), mean(reference));
     let dev = (m_ours - m_theirs).abs() / m_theirs.abs().max(1e-12);
     if let Some(dump) = std::env::var_os("CACHERT_DUMP_DIR") {
-        cachert::image::write(a, &Path::new(&dump).join(format!("{name}-ours.pfm"))).expect("dump");
+        cachert::image::write(ours, &Path::new(&dump).join(format!("{name}-ours.pfm"))).expect("dump");
     }
     eprintln!(
         "{name}: RMSE {err:.5}, noise floor {floor:.5}, ratio {:.3}; mean {m_ours:.5} vs pbrt-v3 {m_theirs:.5} ({:.3} %)",
         err / floor,
         100.0 * dev
     );
-    assert!(a.first_non_finite().is_none(), "{name}: a non-finite pixel");
+    assert!(ours.first_non_finite().is_none(), "{name}: a non-finite pixel");
     assert!(err <= 1.3 * floor, "{name}: RMSE {err} is {:.2}× the noise floor {floor}", err / floor);
     assert!(dev <= mean_tol, "{name}: mean {m_ours} vs pbrt-v3's {m_theirs}");
 }

@@ -84,6 +84,24 @@ impl TrowbridgeReitz {
         self.d(wh) * self.g1(wo) * wo.dot(wh).abs() / abs_cos_theta(wo)
     }
 
+    /// [`TrowbridgeReitz::sample_wh`] as the microfacet lobes use it: `None` for `wo` in the surface plane
+    /// or a normal facing away from `wo` (pbrt-v3 returns no sample then).
+    #[inline]
+    pub fn sample_facing_wh(&self, wo: Vec3A, u: [f32; 2]) -> Option<Vec3A> {
+        if wo.z == 0.0 {
+            return None;
+        }
+        let wh = self.sample_wh(wo, u);
+        (wo.dot(wh) >= 0.0).then_some(wh)
+    }
+
+    /// Density of wi = reflect(wo, wh) when `wh` comes from [`TrowbridgeReitz::sample_wh`]: pdf(wo, wh) /
+    /// (4 wo·wh), the reflection Jacobian.
+    #[inline]
+    pub fn reflected_pdf(&self, wo: Vec3A, wh: Vec3A) -> f32 {
+        self.pdf(wo, wh) / (4.0 * wo.dot(wh))
+    }
+
     /// Stretch, sample the slopes of the unit distribution, rotate and unstretch (wi in the upper hemisphere).
     fn sample_visible(&self, wi: Vec3A, u: [f32; 2]) -> Vec3A {
         let stretched = Vec3A::new(self.alpha_x * wi.x, self.alpha_y * wi.y, wi.z).normalize();

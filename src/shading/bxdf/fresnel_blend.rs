@@ -77,8 +77,7 @@ impl FresnelBlend {
             return 0.0;
         }
         let wh = (wo + wi).normalize();
-        let pdf_wh = self.distribution.pdf(wo, wh);
-        let pdf = 0.5 * (abs_cos_theta(wi) * std::f32::consts::FRAC_1_PI + pdf_wh / (4.0 * wo.dot(wh)));
+        let pdf = 0.5 * (abs_cos_theta(wi) * std::f32::consts::FRAC_1_PI + self.distribution.reflected_pdf(wo, wh));
         if pdf.is_finite() { pdf } else { 0.0 }
     }
 }

@@ -39,18 +39,12 @@ impl MicrofacetReflection {
     /// A direction reflected about a visible microfacet normal.
     #[inline]
     pub fn sample_f(&self, wo: Vec3A, u: [f32; 2]) -> Option<BxdfSample> {
-        if wo.z == 0.0 {
-            return None;
-        }
-        let wh = self.distribution.sample_wh(wo, u);
-        if wo.dot(wh) < 0.0 {
-            return None;
-        }
+        let wh = self.distribution.sample_facing_wh(wo, u)?;
         let wi = reflect(wo, wh);
         if !same_hemisphere(wo, wi) {
             return None;
         }
-        let pdf = self.distribution.pdf(wo, wh) / (4.0 * wo.dot(wh));
+        let pdf = self.distribution.reflected_pdf(wo, wh);
         (pdf > 0.0).then(|| BxdfSample { f: self.f(wo, wi), wi, pdf, sampled: BxdfFlags::GLOSSY_REFLECTION })
     }
 
@@ -60,8 +54,7 @@ impl MicrofacetReflection {
         if !same_hemisphere(wo, wi) {
             return 0.0;
         }
-        let wh = (wo + wi).normalize();
-        let pdf = self.distribution.pdf(wo, wh) / (4.0 * wo.dot(wh));
+        let pdf = self.distribution.reflected_pdf(wo, (wo + wi).normalize());
         if pdf.is_finite() { pdf } else { 0.0 }
     }
 }
@@ -120,13 +113,7 @@ impl MicrofacetTransmission {
     /// A direction refracted through a visible microfacet normal (`None` at total internal reflection).
     #[inline]
     pub fn sample_f(&self, wo: Vec3A, u: [f32; 2]) -> Option<BxdfSample> {
-        if wo.z == 0.0 {
-            return None;
-        }
-        let wh = self.distribution.sample_wh(wo, u);
-        if wo.dot(wh) < 0.0 {
-            return None;
-        }
+        let wh = self.distribution.sample_facing_wh(wo, u)?;
         let eta = if cos_theta(wo) > 0.0 { self.eta_a / self.eta_b } else { self.eta_b / self.eta_a };
         let wi = refract(wo, wh, eta)?;
         let pdf = self.pdf(wo, wi);

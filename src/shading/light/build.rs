@@ -90,7 +90,7 @@ fn read_envmap(path: &str, l: Spectrum) -> std::result::Result<EnvMap, String> {
     if bad > 0 {
         return Err(format!("{path}: {bad} texels are not finite"));
     }
-    Ok(EnvMap::new(im.width, im.height, texels))
+    EnvMap::new(im.width, im.height, texels).ok_or_else(|| format!("{path}: the image has no pixels"))
 }
 
 impl<'a> Lights<'a> {

@@ -10,8 +10,9 @@ use std::f32::consts::PI;
 use glam::{Mat3A, Vec3A};
 
 use super::distribution::Distribution2D;
-use super::envmap::{EnvMap, luminance};
+use super::envmap::EnvMap;
 use crate::shading::Spectrum;
+use crate::shading::luminance;
 
 /// An environment light.
 #[derive(Clone, Debug, PartialEq)]

@@ -323,16 +323,6 @@ impl<'a> Lights<'a> {
         }
     }
 
-    /// The radiance light `light` gives a ray that hits nothing: its `Le` if it is an infinite light, else 0
-    /// (pbrt-v3 `Light::Le`, as `EstimateDirect` asks it of the one light it estimates).
-    #[inline]
-    pub fn le_escaped_by(&self, light: usize, ray: &Ray) -> Spectrum {
-        match self.entries.get(light).map(|e| &e.kind) {
-            Some(Kind::Infinite(i)) => self.infinite.get(*i as usize).map_or(Spectrum::ZERO, |l| l.le(ray.d)),
-            _ => Spectrum::ZERO,
-        }
-    }
-
     /// The radiance of all infinite lights seen by a ray that hits nothing (pbrt-v3 `Light::Le`).
     #[inline]
     pub fn le_escaped(&self, ray: &Ray) -> Spectrum {

@@ -6,7 +6,7 @@
 
 use super::Lights;
 use super::distribution::Distribution1D;
-use super::envmap::luminance;
+use crate::shading::luminance;
 
 /// A discrete distribution over a scene's lights.
 #[derive(Clone, Debug, PartialEq)]

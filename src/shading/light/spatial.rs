@@ -17,7 +17,7 @@ use crate::scene::geometry::SurfaceInteraction;
 
 use super::Lights;
 use super::distribution::Distribution1D;
-use super::envmap::luminance;
+use crate::shading::luminance;
 
 /// Voxels along the longest side of the scene bounds (pbrt-v3's `maxVoxels`).
 const MAX_VOXELS: f32 = 64.0;

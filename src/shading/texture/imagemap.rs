@@ -51,10 +51,10 @@ pub fn inverse_gamma(v: f32) -> f32 {
     if v <= 0.04045 { v * (1.0 / 12.92) } else { ((v + 0.055) * (1.0 / 1.055)).powf(2.4) }
 }
 
-/// pbrt-v3's `RGBSpectrum::y`: luminance of linear RGB.
+/// pbrt-v3's `RGBSpectrum::y` of a texel.
 #[inline]
-pub fn luminance(c: [f32; 3]) -> f32 {
-    0.212671 * c[0] + 0.715160 * c[1] + 0.072169 * c[2]
+fn luminance(c: [f32; 3]) -> f32 {
+    crate::shading::luminance(crate::shading::Spectrum::from(c))
 }
 
 /// Loads the image `key` names. On failure the result is pbrt-v3's grey fallback and the message says

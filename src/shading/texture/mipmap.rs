@@ -69,9 +69,13 @@ impl MipMap {
     }
 
     /// Width and height of the lookup level (powers of two).
-    #[cfg(test)]
     pub fn size(&self) -> [usize; 2] {
         [self.width, self.height]
+    }
+
+    /// The texels of the lookup level, row-major.
+    pub fn texels(&self) -> &[[f32; 3]] {
+        &self.texels
     }
 
     /// Texel (s, t) with the wrap mode applied (t = 0 is the bottom row).

@@ -21,7 +21,7 @@
 mod checkerboard;
 mod imagemap;
 mod mapping;
-mod mipmap;
+pub mod mipmap;
 mod node;
 mod noise;
 
