@@ -207,6 +207,22 @@ impl CacheIndex {
         self.points.get(id as usize).copied()
     }
 
+    /// Distance from cache `id` to its `k`-th nearest other cache in the tree: the radius of the region it
+    /// serves when shading points blend `k` caches. Infinite when the tree has fewer than `k` other caches or
+    /// `id` is not in it.
+    pub fn region_radius(&self, id: u32, k: usize) -> f32 {
+        let (Some(tree), Some(&(p, _))) = (&self.tree, self.points.get(id as usize)) else { return f32::INFINITY };
+        let Some(k1) = NonZeroUsize::new(k + 1).filter(|k1| k1.get() <= self.ids.len()) else {
+            return f32::INFINITY;
+        };
+        if !p.is_finite() {
+            return f32::INFINITY;
+        }
+        let found = tree.query(&p.to_array()).nearest_n::<SquaredEuclidean<f32>>(k1).execute();
+        // The cache itself is among the k + 1 nearest (at distance 0, or tied with a coincident one).
+        found.iter().map(|r| r.distance).fold(0.0f32, f32::max).sqrt()
+    }
+
     /// Squared distance from cache `id` to `p` — the one distance every candidate ranking uses.
     #[inline]
     fn d2(&self, id: u32, p: Vec3A) -> f32 {

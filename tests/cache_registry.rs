@@ -36,16 +36,21 @@ impl Application for NormalZ {
     const ABOUT: &'static str = "the shading normal's z, interpolated (a test)";
     const PARAMETERS: &'static [Parameter] = &[Parameter::new("scale", "float", "1", "multiplies z")];
     type Record = ZRecord;
+    type Prepared<'s> = ();
 
     fn from_params(p: &IntegratorParams<'_>, _: &Scene) -> cachert::Result<Self> {
         Ok(NormalZ { scale: p.float_or("scale", 1.0)? as f32 })
+    }
+
+    fn prepare(&self, _: &Scene, _: &mut Warnings) -> cachert::Result<()> {
+        Ok(())
     }
 
     fn settings(&self) -> Vec<(&'static str, serde_json::Value)> {
         vec![("scale", self.scale.into())]
     }
 
-    fn compute_record(&self, _: &Scene, at: &ShadingPoint, _: &mut Rng, _: &mut RayCounters) -> ZRecord {
+    fn compute_record(&self, _: &(), at: &ShadingPoint, _: &mut Rng, _: &mut RayCounters) -> ZRecord {
         ZRecord { z: self.scale * at.n.z, p: at.p, n: at.n }
     }
 
@@ -57,7 +62,7 @@ impl Application for NormalZ {
     /// and its weight is positive, else 0; channel 2: 1 where an emitter is seen directly.
     fn shade(
         &self,
-        _: &Scene,
+        _: &(),
         s: &ShadingPoint,
         near: &[Neighbour<'_, ZRecord>],
         _: &mut Rng,
@@ -74,12 +79,12 @@ impl Application for NormalZ {
     }
 
     /// Channel 0: z; channel 1: |∂p/∂u · n| / |∂p/∂u| (0 for a tangent); channel 2: the emitter flag.
-    fn reference(&self, _: &Scene, s: &ShadingPoint, _: &mut Rng, _: &mut RayCounters) -> [f32; 3] {
+    fn reference(&self, _: &(), s: &ShadingPoint, _: &mut Rng, _: &mut RayCounters) -> [f32; 3] {
         let along = s.dpdu.normalize_or_zero().dot(s.n).abs();
         [self.scale * s.n.z, along, s.area_light.is_some() as u8 as f32]
     }
 
-    fn record_bytes(&self) -> usize {
+    fn record_bytes(&self, _: &ZRecord) -> usize {
         std::mem::size_of::<ZRecord>()
     }
 }

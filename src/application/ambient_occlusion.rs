@@ -13,7 +13,7 @@
 
 use glam::Vec3A;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Warnings};
 use crate::gbuffer::ShadingPoint;
 use crate::render::params::{IntegratorParams, Parameter, json_f32};
 use crate::sampling::warp::equal_area_hemisphere;
@@ -94,6 +94,7 @@ impl Application for CacheAo {
     ];
 
     type Record = VisibilityRecord;
+    type Prepared<'s> = &'s Scene;
 
     fn from_params(p: &IntegratorParams<'_>, scene: &Scene) -> Result<Self> {
         let bad = |name: &str, what: String| Error::usage(format!("{}{}: \"{name}\" {what}", p.at(name), Self::NAME));
@@ -109,6 +110,10 @@ impl Application for CacheAo {
             None => f32::INFINITY,
         };
         Ok(CacheAo::new(gather as usize, max_distance))
+    }
+
+    fn prepare<'s>(&self, scene: &'s Scene, _: &mut Warnings) -> Result<&'s Scene> {
+        Ok(scene)
     }
 
     fn settings(&self) -> Vec<(&'static str, serde_json::Value)> {
@@ -131,7 +136,7 @@ impl Application for CacheAo {
 
     fn compute_record(
         &self,
-        scene: &Scene,
+        scene: &&Scene,
         at: &ShadingPoint,
         _rng: &mut Rng,
         rays: &mut RayCounters,
@@ -143,9 +148,14 @@ impl Application for CacheAo {
         a.mask.iter().zip(b.mask.iter()).map(|(x, y)| (x ^ y).count_ones()).sum::<u32>() as f32
     }
 
+    /// Shading reads only the AO value: the mask goes.
+    fn finish_record(&self, _: &&Scene, record: &mut VisibilityRecord, _: f32) {
+        record.mask = Box::new([]);
+    }
+
     fn shade(
         &self,
-        _: &Scene,
+        _: &&Scene,
         _: &ShadingPoint,
         near: &[Neighbour<'_, VisibilityRecord>],
         _: &mut Rng,
@@ -159,11 +169,11 @@ impl Application for CacheAo {
         [if wsum > 0.0 { sum / wsum } else { 0.0 }; 3]
     }
 
-    fn reference(&self, scene: &Scene, s: &ShadingPoint, _: &mut Rng, rays: &mut RayCounters) -> [f32; 3] {
+    fn reference(&self, scene: &&Scene, s: &ShadingPoint, _: &mut Rng, rays: &mut RayCounters) -> [f32; 3] {
         [self.gather(scene, s, rays).ao; 3]
     }
 
-    fn record_bytes(&self) -> usize {
-        std::mem::size_of::<VisibilityRecord>() + self.dirs.len().div_ceil(64) * 8
+    fn record_bytes(&self, record: &VisibilityRecord) -> usize {
+        std::mem::size_of::<VisibilityRecord>() + std::mem::size_of_val(&*record.mask)
     }
 }

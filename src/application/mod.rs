@@ -9,15 +9,20 @@
 //! render stage's cache driver (`render::cache_driver`), `render --help`, `info` and `experiment` pick it up
 //! from there.
 //!
-//! Depends on `scene`, `gbuffer`, `sampling` and the parameter reader `render::params`; never on
-//! `placement` or the cache driver.
+//! An application prepares what it reads from the scene once per render ([`Application::prepare`]: for
+//! irradiance caching the lights, materials and textures) and every other call reads that, so the cache
+//! driver never needs to know what an application shades with.
+//!
+//! Depends on `scene`, `gbuffer`, `sampling`, `shading`, the shading estimators of `render::lighting` and the
+//! parameter reader `render::params`; never on `placement` or the cache driver.
 
 pub mod ambient_occlusion;
+pub mod irradiance;
 pub mod registry;
 
 use glam::Vec3A;
 
-use crate::error::Result;
+use crate::error::{Result, Warnings};
 use crate::gbuffer::ShadingPoint;
 use crate::render::params::{IntegratorParams, Parameter};
 use crate::sampling::Rng;
@@ -55,7 +60,23 @@ pub struct Baseline {
     pub scale: f32,
 }
 
+/// A per-pixel integrator whose image is added to the cached one (irradiance caching's `output full`: the
+/// emitted and direct light that the caches, holding indirect light only, leave out). It renders with the
+/// scene's Sampler and PixelFilter, as it would on its own.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PerPixelTerm {
+    /// The per-pixel integrator's name (`directlighting`).
+    pub integrator: &'static str,
+    /// Its parameters.
+    pub set: Vec<(String, String)>,
+}
+
 /// A cache-based rendering application.
+///
+/// The driver calls, in order: [`Application::from_params`], [`Application::prepare`], then
+/// [`Application::compute_record`] at every cache site (and [`Application::diff`] between records while
+/// placing), [`Application::finish_record`] once placement is over, and [`Application::shade`] at every
+/// sub-pixel sample — or [`Application::reference`] at every sub-pixel sample for the per-sample reference.
 pub trait Application: Sync + Sized {
     /// The integrator name users type (in the scene's `Integrator` line or `--integrator`).
     const NAME: &'static str;
@@ -68,8 +89,16 @@ pub trait Application: Sync + Sized {
     /// What one cache stores.
     type Record: Send + Sync;
 
+    /// The scene as the application reads it while rendering: a reference to it and whatever is prepared
+    /// from it once (lights, materials, textures). Made by [`Application::prepare`].
+    type Prepared<'s>: Sync;
+
     /// Reads exactly the parameters of [`Application::PARAMETERS`] (a bad value is an error naming it).
     fn from_params(p: &IntegratorParams<'_>, scene: &Scene) -> Result<Self>;
+
+    /// Prepares what the application reads from `scene` while rendering; problems that do not stop it (a
+    /// scene without lights) are warnings.
+    fn prepare<'s>(&self, scene: &'s Scene, warnings: &mut Warnings) -> Result<Self::Prepared<'s>>;
 
     /// The resolved parameters (defaults filled in), for the `--stats` report.
     fn settings(&self) -> Vec<(&'static str, serde_json::Value)>;
@@ -79,17 +108,38 @@ pub trait Application: Sync + Sized {
         None
     }
 
+    /// The per-pixel integrator whose image is added to the cached one, if any (the cached image and the
+    /// per-sample reference alike).
+    fn per_pixel_term(&self) -> Option<PerPixelTerm> {
+        None
+    }
+
     /// Evaluates the expensive shading function at a cache site: the value and the per-sample gathering
     /// data that [`Application::diff`] compares.
-    fn compute_record(&self, scene: &Scene, at: &ShadingPoint, rng: &mut Rng, rays: &mut RayCounters) -> Self::Record;
+    fn compute_record(
+        &self,
+        cx: &Self::Prepared<'_>,
+        at: &ShadingPoint,
+        rng: &mut Rng,
+        rays: &mut RayCounters,
+    ) -> Self::Record;
 
     /// Σ_k |g_a[k] − g_b[k]| over corresponding gathering samples (ALGORITHMS.md §4.5.2).
     fn diff(&self, a: &Self::Record, b: &Self::Record) -> f32;
 
+    /// Called once per record when placement is over and before any shading: keeps what shading needs and
+    /// may drop the per-sample data that only [`Application::diff`] reads (so memory stays flat while the
+    /// image renders), or derive what depends on the final cache set. `region` is the distance from the
+    /// cache to the M-th nearest other cache (ALGORITHMS.md §5's M; infinite when there are fewer): the
+    /// radius of the region the cache serves.
+    fn finish_record(&self, cx: &Self::Prepared<'_>, record: &mut Self::Record, region: f32) {
+        let _ = (cx, record, region);
+    }
+
     /// Shades one sample from its selected caches (at least one; Σ weights > 0).
     fn shade(
         &self,
-        scene: &Scene,
+        cx: &Self::Prepared<'_>,
         s: &ShadingPoint,
         near: &[Neighbour<'_, Self::Record>],
         rng: &mut Rng,
@@ -97,8 +147,9 @@ pub trait Application: Sync + Sized {
     ) -> [f32; 3];
 
     /// The brute-force answer at one sample: what the caches approximate (references, goldens).
-    fn reference(&self, scene: &Scene, s: &ShadingPoint, rng: &mut Rng, rays: &mut RayCounters) -> [f32; 3];
+    fn reference(&self, cx: &Self::Prepared<'_>, s: &ShadingPoint, rng: &mut Rng, rays: &mut RayCounters) -> [f32; 3];
 
-    /// Bytes one record occupies (for the memory report).
-    fn record_bytes(&self) -> usize;
+    /// Bytes `record` occupies, heap included (for the memory report; asked before and after
+    /// [`Application::finish_record`]).
+    fn record_bytes(&self, record: &Self::Record) -> usize;
 }

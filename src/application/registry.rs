@@ -9,6 +9,7 @@ use crate::render::params::Parameter;
 
 use super::Application;
 use super::ambient_occlusion::CacheAo;
+use super::irradiance::IrradianceCache;
 
 /// What is known about a registered application without its type: name, summary, parameter table.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -57,6 +58,7 @@ macro_rules! applications {
 // The registry: one line per application.
 applications! {
     CacheAo,
+    IrradianceCache,
 }
 
 /// The registered names, comma-separated (for messages).

@@ -58,6 +58,14 @@ impl Image {
         self.pixels[y * self.width + x] = c;
     }
 
+    /// Adds `other` pixel by pixel. Panics when the sizes differ.
+    pub fn add(&mut self, other: &Image) {
+        assert!(self.width == other.width && self.height == other.height, "adding images of different sizes");
+        for (a, b) in self.pixels.iter_mut().zip(&other.pixels) {
+            (0..3).for_each(|k| a[k] += b[k]);
+        }
+    }
+
     /// The mean of each channel over all pixels, accumulated in f64 row by row and then over rows in
     /// order, so the result does not depend on anything but the pixels. An empty image gives zeros.
     pub fn mean(&self) -> [f64; 3] {

@@ -132,24 +132,54 @@ pub fn render(
         )));
     }
     let iparams = params::IntegratorParams::new(params, &settings.set);
-    let pixel: Box<dyn PixelIntegrator> = match name {
-        "ambientocclusion" => Box::new(ao::AmbientOcclusion::from_params(&iparams, &sampler, settings.quick)?),
-        "directlighting" => {
-            Box::new(directlighting::DirectLighting::from_params(&iparams, scene, &sampler, settings.quick, warnings)?)
-        }
-        "path" => Box::new(path::Path::from_params(&iparams, scene, warnings)?),
+    let pixel = per_pixel_integrator(name, &iparams, scene, &sampler, settings.quick, warnings)?;
+    iparams.check_overrides(name)?;
+    report_unused(integrator, name, &settings.set, warnings);
+    let run = || render_image(scene, &sampler, pixel.as_ref(), settings.seed, settings.progress);
+    let (image, rays, render_secs) = with_threads(settings.threads, run)?;
+    Ok(RenderOutput { image, rays, render_secs, spp: sampler.spp, integrator: name.to_string(), cache: None })
+}
+
+/// The per-pixel integrator named `name` with parameters `p`.
+fn per_pixel_integrator<'a>(
+    name: &str,
+    p: &params::IntegratorParams<'_>,
+    scene: &'a Scene,
+    sampler: &crate::scene::sampler::SamplerSpec,
+    quick: bool,
+    warnings: &mut Warnings,
+) -> Result<Box<dyn PixelIntegrator + 'a>> {
+    Ok(match name {
+        "ambientocclusion" => Box::new(ao::AmbientOcclusion::from_params(p, sampler, quick)?),
+        "directlighting" => Box::new(directlighting::DirectLighting::from_params(p, scene, sampler, quick, warnings)?),
+        "path" => Box::new(path::Path::from_params(p, scene, warnings)?),
         other => {
             return Err(Error::usage(format!(
                 "integrator \"{other}\" is not implemented by cachert (available: {}); choose one with --integrator",
                 integrator_names()
             )));
         }
-    };
-    iparams.check_overrides(name)?;
-    report_unused(integrator, name, &settings.set, warnings);
-    let run = || render_image(scene, &sampler, pixel.as_ref(), settings.seed, settings.progress);
-    let (image, rays, render_secs) = with_threads(settings.threads, run)?;
-    Ok(RenderOutput { image, rays, render_secs, spp: sampler.spp, integrator: name.to_string(), cache: None })
+    })
+}
+
+/// Renders the per-pixel integrator `name` with parameters `set` only (the scene's `Integrator` line is
+/// not read) with the scene's Sampler and PixelFilter — `--spp` and `--quick` apply — for a cache
+/// application's per-pixel term. Runs in the current thread pool; returns the image, rays and wall time.
+pub(crate) fn render_per_pixel_term(
+    scene: &Scene,
+    name: &str,
+    set: &[(String, String)],
+    settings: &RenderSettings,
+    warnings: &mut Warnings,
+) -> Result<(Image, RayCounters, f64)> {
+    let mut sampler = scene.sampler.clone();
+    if let Some(spp) = settings.spp.filter(|&n| n > 0) {
+        sampler.spp = spp;
+    }
+    let empty = ParamList::default();
+    let iparams = params::IntegratorParams::new(&empty, set);
+    let pixel = per_pixel_integrator(name, &iparams, scene, &sampler, settings.quick, warnings)?;
+    Ok(render_image(scene, &sampler, pixel.as_ref(), settings.seed, settings.progress))
 }
 
 /// Runs `f` in a pool of `threads` workers (default, or 0 as in pbrt-v3: rayon's global pool, all cores).

@@ -21,7 +21,7 @@ use crate::parse::{Named, ParamList};
 use crate::scene::{Scene, filter};
 
 use super::params::{IntegratorParams, help_text};
-use super::{RenderOutput, RenderSettings, report_unused, with_threads};
+use super::{RenderOutput, RenderSettings, render_per_pixel_term, report_unused, with_threads};
 
 /// Renders `scene` with cache application `A`: the scene's `Integrator` parameters (when it names `A`)
 /// and `settings.set` give both the generic and `A`'s parameters; `settings.cache` wins over them.
@@ -36,14 +36,34 @@ pub fn render_with<A: Application>(
         Some(n) if n.name == A::NAME => &n.params,
         _ => &empty,
     };
-    let overrides = cache_sample_settings(scene, params, settings, warnings);
     let p = IntegratorParams::new(params, &settings.set);
-    let cs = CacheSettings::from_params(&p, &overrides, scene, A::NAME, settings.seed, settings.progress)?;
     let app = A::from_params(&p, scene)?;
+    let term = app.per_pixel_term();
+    let overrides = cache_sample_settings(scene, params, settings, term.is_some(), warnings);
+    let cs = CacheSettings::from_params(&p, &overrides, scene, A::NAME, settings.seed, settings.progress)?;
     p.check_overrides(A::NAME)?;
     report_unused(integrator, A::NAME, &settings.set, warnings);
-    let run = || render_cached(scene, &app, &cs);
+    let cx = app.prepare(scene, warnings)?;
+    let mut term_warnings = Warnings::default();
+    let run = || -> Result<CachedOutput> {
+        let mut out = render_cached(scene, &app, &cx, &cs)?;
+        if let Some(term) = &term {
+            let w = &mut term_warnings;
+            let (image, rays, secs) = render_per_pixel_term(scene, term.integrator, &term.set, settings, w)?;
+            out.image.add(&image);
+            out.stats.render_rays.add(&rays);
+            out.stats.times.per_pixel_term = secs;
+            out.stats.times.total += secs;
+            out.stats.notes.push(format!(
+                "the image adds {} ({}) rendered with the scene's Sampler and PixelFilter",
+                term.integrator,
+                term.set.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", ")
+            ));
+        }
+        Ok(out)
+    };
     let out = with_threads(settings.threads, run)??;
+    warnings.extend(term_warnings);
     let mut rays = out.stats.cache_rays;
     rays.add(&out.stats.render_rays);
     Ok(RenderOutput {
@@ -98,6 +118,7 @@ fn cache_sample_settings(
     scene: &Scene,
     params: &ParamList,
     settings: &RenderSettings,
+    per_pixel_term: bool,
     warnings: &mut Warnings,
 ) -> CacheOverrides {
     let mut o = settings.cache;
@@ -111,6 +132,10 @@ fn cache_sample_settings(
         None => {}
     }
     let per_pixel = "it shades \"subpixels\" jittered positions per pixel (set it, or --spp)";
+    if per_pixel_term {
+        // The per-pixel term renders with the scene's Sampler and PixelFilter: they are used.
+        return o;
+    }
     if let Some(loc) = &scene.declared.sampler {
         warnings
             .at(loc, format!("Sampler \"{}\" is not used by cache-based integrators: {per_pixel}", scene.sampler.name));

@@ -56,8 +56,8 @@ const GROUP_PIXELS: usize = 8;
 const SUBPIXEL_KEY: u64 = 0x5355_4250_4958;
 
 /// The evaluated caches: sites, records and what evaluating them cost. Implements [`CacheOracle`].
-struct Store<'a, A: Application> {
-    scene: &'a Scene,
+struct Store<'a, 's, A: Application> {
+    cx: &'a A::Prepared<'s>,
     app: &'a A,
     g: &'a GBuffer,
     seed: u64,
@@ -68,7 +68,7 @@ struct Store<'a, A: Application> {
     bar: ProgressBar,
 }
 
-impl<A: Application> CacheOracle for Store<'_, A> {
+impl<A: Application> CacheOracle for Store<'_, '_, A> {
     fn len(&self) -> usize {
         self.records.len()
     }
@@ -87,14 +87,14 @@ impl<A: Application> CacheOracle for Store<'_, A> {
 
     fn evaluate(&mut self, sites: &[PixelId]) {
         let t = Instant::now();
-        let (scene, app, g, seed, bar) = (self.scene, self.app, self.g, self.seed, &self.bar);
+        let (cx, app, g, seed, bar) = (self.cx, self.app, self.g, self.seed, &self.bar);
         let out: Vec<Option<(A::Record, RayCounters)>> = sites
             .par_iter()
             .map(|&id| {
                 let sp = g.get(id)?;
                 let mut rng = Rng::keyed(seed, STAGE_RECORD, id as u64);
                 let mut rays = RayCounters::default();
-                let r = app.compute_record(scene, sp, &mut rng, &mut rays);
+                let r = app.compute_record(cx, sp, &mut rng, &mut rays);
                 bar.inc(1);
                 Some((r, rays))
             })
@@ -130,8 +130,14 @@ fn subpixel(x: i32, y: i32, i: u32) -> [f32; 2] {
     sobol02(i, [(k >> 32) as u32, k as u32])
 }
 
-/// Renders `scene` with application `app` and the caches `s` describes.
-pub fn render_cached<A: Application>(scene: &Scene, app: &A, s: &CacheSettings) -> Result<CachedOutput> {
+/// Renders `scene` with application `app` (and what it prepared from the scene, `cx`) and the caches `s`
+/// describes.
+pub fn render_cached<A: Application>(
+    scene: &Scene,
+    app: &A,
+    cx: &A::Prepared<'_>,
+    s: &CacheSettings,
+) -> Result<CachedOutput> {
     let start = Instant::now();
     let mut times = StageTimes::default();
     let mut stats = CacheStats::default();
@@ -148,7 +154,7 @@ pub fn render_cached<A: Application>(scene: &Scene, app: &A, s: &CacheSettings) 
     let mut index_and_store = None;
     let lambda = s.params.lambda_for(g.scene_diagonal);
     let mut store = Store {
-        scene,
+        cx,
         app,
         g: &g,
         seed: s.seed,
@@ -202,16 +208,23 @@ pub fn render_cached<A: Application>(scene: &Scene, app: &A, s: &CacheSettings) 
             store.sites.iter().map(|&id| g.get(id).map_or((Vec3A::NAN, Vec3A::NAN), |p| (p.p, p.n))).collect();
         let index = CacheIndex::new(&cache_points, s.params.lookup, lambda).with_scene_diagonal(g.scene_diagonal);
         times.kd_tree = t.elapsed().as_secs_f64();
+        stats.record_bytes = store.records.iter().map(|r| app.record_bytes(r)).sum();
+        let t = Instant::now();
+        let keep = s.params.lookup.keep;
+        store.records.par_iter_mut().enumerate().for_each(|(id, r)| {
+            app.finish_record(cx, r, index.region_radius(id as u32, keep));
+        });
+        times.finish_records = t.elapsed().as_secs_f64();
+        stats.record_bytes_kept = store.records.iter().map(|r| app.record_bytes(r)).sum();
         index_and_store = Some(index);
     }
     stats.cache_rays = store.rays;
     let t = Instant::now();
     let caches = Caches { index: index_and_store.as_ref(), records: &store.records, points: &cache_points };
-    let (image, render_rays) = shade_image(scene, app, s, &caches, none);
+    let (image, render_rays) = shade_image(scene, app, cx, s, &caches, none);
     times.render = t.elapsed().as_secs_f64();
     stats.render_rays = render_rays;
     stats.total_caches = store.records.len();
-    stats.record_bytes = store.records.len() * app.record_bytes();
     times.total = start.elapsed().as_secs_f64();
     stats.times = times;
     stats.peak_memory_bytes = peak_memory_bytes();
@@ -231,6 +244,7 @@ struct Caches<'a, R> {
 fn shade_image<A: Application>(
     scene: &Scene,
     app: &A,
+    cx: &A::Prepared<'_>,
     s: &CacheSettings,
     caches: &Caches<'_, A::Record>,
     reference: bool,
@@ -267,7 +281,7 @@ fn shade_image<A: Application>(
                 if reference {
                     for &(col, k, sp) in &points {
                         let mut rng = Rng::keyed(s.seed, STAGE_SHADE, k);
-                        add(col, app.reference(scene, &sp, &mut rng, &mut rays));
+                        add(col, app.reference(cx, &sp, &mut rng, &mut rays));
                     }
                 } else if let Some(index) = caches.index {
                     queries.clear();
@@ -282,7 +296,7 @@ fn shade_image<A: Application>(
                         }));
                         if !blend.is_empty() {
                             let mut rng = Rng::keyed(s.seed, STAGE_SHADE, *k);
-                            add(*col, app.shade(scene, sp, &blend, &mut rng, &mut rays));
+                            add(*col, app.shade(cx, sp, &blend, &mut rng, &mut rays));
                         }
                     });
                 }

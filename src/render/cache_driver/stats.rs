@@ -21,8 +21,12 @@ pub struct StageTimes {
     pub adaptive_computation: f64,
     /// Building the kd-tree.
     pub kd_tree: f64,
+    /// Finishing the records once placement is over (`Application::finish_record`).
+    pub finish_records: f64,
     /// Shading every sub-pixel sample.
     pub render: f64,
+    /// Rendering the per-pixel term added to the cached image (`Application::per_pixel_term`).
+    pub per_pixel_term: f64,
     /// Everything.
     pub total: f64,
 }
@@ -30,7 +34,7 @@ pub struct StageTimes {
 impl StageTimes {
     /// The steps in pipeline order with their summary labels (total excluded): the one list behind the
     /// end-of-run summary and the experiment CSV's columns.
-    pub fn steps(&self) -> [(&'static str, f64); 7] {
+    pub fn steps(&self) -> [(&'static str, f64); 9] {
         [
             ("shading points", self.shading_points),
             ("initial gen", self.initial_generation),
@@ -38,7 +42,9 @@ impl StageTimes {
             ("adaptive gen", self.adaptive_generation),
             ("adaptive comp", self.adaptive_computation),
             ("kd-tree", self.kd_tree),
+            ("finish records", self.finish_records),
             ("render", self.render),
+            ("per-pixel term", self.per_pixel_term),
         ]
     }
 }
@@ -67,8 +73,10 @@ pub struct CacheStats {
     /// Rays traced while shading samples (camera rays; reference occlusion rays).
     #[serde(serialize_with = "ser_rays")]
     pub render_rays: RayCounters,
-    /// Bytes of cache records.
+    /// Bytes of the cache records while placing (with their per-sample gathering data).
     pub record_bytes: usize,
+    /// Bytes of the cache records while shading (after `Application::finish_record`).
+    pub record_bytes_kept: usize,
     /// Peak resident memory of the process (bytes), where the OS reports it.
     pub peak_memory_bytes: Option<u64>,
     /// Remarks (budget above the valid pixels, …).

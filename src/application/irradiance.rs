@@ -1,0 +1,353 @@
+//! Irradiance caching (Ward 1988; the paper's §4.1; ALGORITHMS.md §6.2), registered as `irradiancecache`.
+//!
+//! A cache gathers along the n×n directions of the equal-area hemisphere grid in its generic-axis frame
+//! (§3.2–3.3; n = 64: 4096 directions). Each direction is one path: the first hit's emission is left out
+//! (it is direct light at the cache), every later vertex adds next-event estimation from one light chosen
+//! by power (pbrt-v3's `EstimateDirect`, MIS between light and BSDF sampling), the path continues by BSDF
+//! sampling, emitted radiance found after a specular bounce is added, and Russian roulette starts after the
+//! third bounce (pbrt-v3 `path`'s rule). `maxdepth` counts the vertices that sample a light, as pbrt-v2's
+//! `maxindirectdepth` does: with the per-pixel direct term of `output full` the light paths are those of
+//! pbrt-v3 `path` with `maxdepth + 1`. A ray that leaves the scene at the first hit brings no light (an
+//! infinite light's radiance at the cache is direct light, as in pbrt-v2's irradiance cache).
+//!
+//! E = (2π/n²) Σ_k L_k cos θ_k (RGB); the record keeps E and, until placement is over, the luminance of
+//! every L_k, which is what two caches are compared by (Σ_k |ΔY|, §4.5.2). A sample is shaded as
+//! ρ_hd(ω_o)·E/π with E blended from its caches, ρ_hd over the BSDF's non-specular reflection lobes (exact
+//! for Lambertian lobes, 64 fixed stratified samples otherwise); purely specular and transmitting lobes
+//! get nothing from the caches. `output full` adds pbrt-v3's `directlighting` image (emission and direct
+//! light, with the scene's Sampler and PixelFilter) so the image compares with a path-traced one.
+//!
+//! The reference gathers the same n² paths at every sub-pixel sample.
+
+use glam::Vec3A;
+
+use crate::error::{Error, Result, Warnings};
+use crate::gbuffer::ShadingPoint;
+use crate::render::directlighting::MAX_DEPTH;
+use crate::render::lighting::{ShadePoint, Shading, estimate_direct};
+use crate::render::params::{IntegratorParams, Parameter};
+use crate::sampling::warp::equal_area_hemisphere;
+use crate::sampling::{Frame, Rng};
+use crate::scene::Scene;
+use crate::scene::geometry::SurfaceInteraction;
+use crate::scene::ray::{Ray, RayCounters, offset_ray_origin};
+use crate::shading::bsdf::Bsdf;
+use crate::shading::bxdf::BxdfFlags;
+use crate::shading::light::LightSelect;
+use crate::shading::{Spectrum, luminance};
+
+use super::{Application, Neighbour, PerPixelTerm};
+
+/// Most surfaces without a material a gathering path passes through before it gives up.
+const MAX_PASS_THROUGH: usize = 1024;
+
+/// Samples of the fixed set that estimates ρ_hd of non-Lambertian lobes (an 8×8 stratified grid).
+const RHO_SIDE: usize = 8;
+
+/// What the image holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Output {
+    /// Indirect light only (the paper's figures).
+    Indirect,
+    /// Emitted and direct light (pbrt-v3 `directlighting`, per pixel) plus the cached indirect light.
+    Full,
+}
+
+impl Output {
+    fn name(self) -> &'static str {
+        match self {
+            Output::Indirect => "indirect",
+            Output::Full => "full",
+        }
+    }
+}
+
+/// An irradiance cache: E and, while placement needs it, the luminance of each gathering direction.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IrradianceRecord {
+    /// Indirect irradiance (RGB).
+    pub e: [f32; 3],
+    /// Luminance of the radiance arriving along each gathering direction (index k of §3.3); empty once
+    /// placement is over.
+    pub radiance: Box<[f32]>,
+}
+
+/// The irradiance-caching application: settings and the fixed direction set.
+#[derive(Clone, Debug)]
+pub struct IrradianceCache {
+    dirs: Vec<Vec3A>,
+    /// Vertices of a gathering path that sample a light.
+    pub max_depth: u32,
+    /// What the image holds.
+    pub output: Output,
+    rho_u: Vec<[f32; 2]>,
+}
+
+/// The scene with its lights, materials and textures, as irradiance caching reads it.
+pub struct Lit<'s> {
+    scene: &'s Scene,
+    shading: Shading<'s>,
+    select: LightSelect,
+}
+
+impl IrradianceCache {
+    /// Gathers along an `n`×`n` grid with paths sampling a light at `max_depth` vertices.
+    pub fn new(n: usize, max_depth: u32, output: Output) -> Self {
+        let dirs = (0..n * n)
+            .map(|k| equal_area_hemisphere([((k % n) as f32 + 0.5) / n as f32, ((k / n) as f32 + 0.5) / n as f32]))
+            .collect();
+        let mut rng = Rng::new(0x7268_6f5f_6864);
+        let rho_u = (0..RHO_SIDE * RHO_SIDE)
+            .map(|i| {
+                let [a, b] = rng.uniform2();
+                [((i % RHO_SIDE) as f32 + a) / RHO_SIDE as f32, ((i / RHO_SIDE) as f32 + b) / RHO_SIDE as f32]
+            })
+            .map(|u| u.map(|v| v.min(1.0 - f32::EPSILON / 2.0)))
+            .collect();
+        IrradianceCache { dirs, max_depth, output, rho_u }
+    }
+
+    /// Number of gathering directions.
+    pub fn directions(&self) -> usize {
+        self.dirs.len()
+    }
+
+    /// E at `at` by the n² gathering paths; the luminance of each direction's radiance goes to
+    /// `radiance[k]` when given (directions below the surface get 0).
+    fn gather(
+        &self,
+        cx: &Lit<'_>,
+        at: &ShadingPoint,
+        rng: &mut Rng,
+        rays: &mut RayCounters,
+        mut radiance: Option<&mut [f32]>,
+    ) -> Spectrum {
+        if self.max_depth == 0 || cx.shading.lights.is_empty() {
+            return Spectrum::ZERO;
+        }
+        let frame = Frame::generic(at.n);
+        let mut sum = Spectrum::ZERO;
+        for (k, local) in self.dirs.iter().enumerate() {
+            let w = frame.to_world(*local);
+            if w.dot(at.ng) <= 0.0 {
+                continue;
+            }
+            let ray = Ray::new(offset_ray_origin(at.p, at.p_error, at.ng, w), w);
+            let l = self.incident(cx, ray, rng, rays);
+            if let Some(r) = radiance.as_deref_mut() {
+                r[k] = luminance(l);
+            }
+            sum += l * local.z;
+        }
+        sum * (2.0 * std::f32::consts::PI / self.dirs.len() as f32)
+    }
+
+    /// Indirect radiance arriving along `ray` (see the module documentation for what counts).
+    fn incident(&self, cx: &Lit<'_>, mut ray: Ray, rng: &mut Rng, rays: &mut RayCounters) -> Spectrum {
+        let (scene, sh) = (cx.scene, &cx.shading);
+        let mut l = Spectrum::ZERO;
+        let mut beta = Spectrum::ONE;
+        let mut specular = false;
+        let mut vertices = 0u32;
+        let mut passes = 0usize;
+        loop {
+            rays.camera += 1;
+            let Some(si) = scene.geometry.intersect(&ray) else {
+                if specular {
+                    l += beta * sh.lights.le_escaped(&ray);
+                }
+                break;
+            };
+            if specular {
+                l += beta * sh.lights.emitted(&si, -ray.d);
+            }
+            let Some(bsdf) = sh.bsdf(&si) else {
+                passes += 1;
+                if passes > MAX_PASS_THROUGH {
+                    break;
+                }
+                ray = si.spawn_ray(ray.d);
+                continue;
+            };
+            let wo = -ray.d;
+            let x = ShadePoint { si: &si, bsdf: &bsdf, wo };
+            if bsdf.num_components(BxdfFlags::NON_SPECULAR) > 0
+                && let Some((light, pmf)) = cx.select.sample(rng.uniform())
+            {
+                let (u_light, u_scatter) = (rng.uniform2(), rng.uniform2());
+                l += beta * estimate_direct(scene, sh, &x, light, u_light, u_scatter, rays) / pmf;
+            }
+            vertices += 1;
+            if vertices >= self.max_depth {
+                break;
+            }
+            let Some(bs) = bsdf.sample_f(wo, rng.uniform2(), BxdfFlags::ALL) else { break };
+            if bs.f == Spectrum::ZERO || bs.pdf <= 0.0 {
+                break;
+            }
+            beta *= bs.f * bs.wi.dot(bsdf.shading_normal()).abs() / bs.pdf;
+            specular = bs.sampled.contains(BxdfFlags::SPECULAR);
+            ray = si.spawn_ray(bs.wi);
+            // pbrt-v3 path's Russian roulette (after the third bounce, throughput below 1).
+            let rr = beta.max_element();
+            if rr < 1.0 && vertices > 3 {
+                let q = (1.0 - rr).max(0.05);
+                if rng.uniform() < q {
+                    break;
+                }
+                beta /= 1.0 - q;
+            }
+        }
+        l
+    }
+
+    /// ρ_hd(ω_o)/π at a sample: the factor that turns irradiance into reflected radiance.
+    fn reflectance(&self, cx: &Lit<'_>, s: &ShadingPoint) -> Spectrum {
+        let Some(bsdf) = interaction(s).and_then(|si| cx.shading.bsdf(&si)) else { return Spectrum::ZERO };
+        diffuse_reflectance(&bsdf, s.wo, &self.rho_u) * std::f32::consts::FRAC_1_PI
+    }
+}
+
+/// ρ_hd(ω_o) over the non-specular reflection lobes of `bsdf`: the lobes that reflect cached irradiance.
+fn diffuse_reflectance(bsdf: &Bsdf, wo: Vec3A, u: &[[f32; 2]]) -> Spectrum {
+    let wo_l = bsdf.to_local(wo);
+    bsdf.lobes()
+        .filter(|(b, _)| {
+            let f = b.flags();
+            f.contains(BxdfFlags::REFLECTION) && !f.intersects(BxdfFlags::SPECULAR | BxdfFlags::TRANSMISSION)
+        })
+        .map(|(b, scale)| scale * b.rho_hd(wo_l, u))
+        .sum()
+}
+
+/// The surface interaction of a shading point, its normals faced toward the camera (the side whose
+/// irradiance the caches hold); `None` for a point not made by a camera ray (no primitive).
+fn interaction(s: &ShadingPoint) -> Option<SurfaceInteraction> {
+    Some(SurfaceInteraction {
+        p: s.p,
+        p_error: s.p_error,
+        t: s.depth,
+        ng: s.ng,
+        ns: s.n,
+        dpdu: s.dpdu,
+        uv: s.uv,
+        material: s.material,
+        area_light: s.area_light,
+        origin: s.origin?,
+    })
+}
+
+impl Application for IrradianceCache {
+    const NAME: &'static str = "irradiancecache";
+    const ABOUT: &'static str = "irradiance caching: indirect diffuse light ρ_hd·E/π from gathered irradiance";
+    const PARAMETERS: &'static [Parameter] = &[
+        Parameter::new("gather", "integer", "64", "gathering grid side: gather² paths per cache"),
+        Parameter::new(
+            "maxdepth",
+            "integer",
+            "3",
+            "path vertices that sample a light (pbrt-v2's maxindirectdepth; = pbrt-v3 path maxdepth − 1)",
+        ),
+        Parameter::new(
+            "output",
+            "string",
+            "indirect",
+            "indirect: cached indirect light only; full: plus emission and directlighting per pixel",
+        ),
+    ];
+
+    type Record = IrradianceRecord;
+    type Prepared<'s> = Lit<'s>;
+
+    fn from_params(p: &IntegratorParams<'_>, _: &Scene) -> Result<Self> {
+        let bad = |name: &str, what: String| Error::usage(format!("{}{}: \"{name}\" {what}", p.at(name), Self::NAME));
+        let gather = p.int_or("gather", 64)?;
+        if !(1..=256).contains(&gather) {
+            return Err(bad("gather", format!("must be between 1 and 256, got {gather}")));
+        }
+        let max_depth = p.int_or("maxdepth", 3)?;
+        if !(0..=MAX_DEPTH).contains(&max_depth) {
+            return Err(bad("maxdepth", format!("must be between 0 and {MAX_DEPTH}, got {max_depth}")));
+        }
+        let output = match p.string_or("output", "indirect")?.as_str() {
+            "indirect" => Output::Indirect,
+            "full" => Output::Full,
+            other => return Err(bad("output", format!("must be \"indirect\" or \"full\", got \"{other}\""))),
+        };
+        Ok(IrradianceCache::new(gather as usize, max_depth as u32, output))
+    }
+
+    fn prepare<'s>(&self, scene: &'s Scene, warnings: &mut Warnings) -> Result<Lit<'s>> {
+        let shading = Shading::build(scene, true, warnings)?;
+        let select = LightSelect::new(&shading.lights, "power").map_err(Error::usage)?;
+        if self.max_depth == 0 {
+            warnings.general(format!(
+                "{}: \"maxdepth\" 0 samples no light along gathering paths: the caches hold no indirect light",
+                Self::NAME
+            ));
+        }
+        Ok(Lit { scene, shading, select })
+    }
+
+    fn settings(&self) -> Vec<(&'static str, serde_json::Value)> {
+        let n = (self.dirs.len() as f64).sqrt().round() as u64;
+        vec![("gather", n.into()), ("maxdepth", self.max_depth.into()), ("output", self.output.name().into())]
+    }
+
+    /// `output full`: pbrt-v3's `directlighting` with its defaults.
+    fn per_pixel_term(&self) -> Option<PerPixelTerm> {
+        (self.output == Output::Full).then(|| PerPixelTerm { integrator: "directlighting", set: Vec::new() })
+    }
+
+    fn compute_record(
+        &self,
+        cx: &Lit<'_>,
+        at: &ShadingPoint,
+        rng: &mut Rng,
+        rays: &mut RayCounters,
+    ) -> IrradianceRecord {
+        let mut radiance = vec![0.0f32; self.dirs.len()].into_boxed_slice();
+        let e = self.gather(cx, at, rng, rays, Some(&mut radiance));
+        IrradianceRecord { e: e.to_array(), radiance }
+    }
+
+    fn diff(&self, a: &IrradianceRecord, b: &IrradianceRecord) -> f32 {
+        a.radiance.iter().zip(b.radiance.iter()).map(|(x, y)| (x - y).abs()).sum()
+    }
+
+    /// Shading reads only E: the per-direction radiance goes.
+    fn finish_record(&self, _: &Lit<'_>, record: &mut IrradianceRecord, _: f32) {
+        record.radiance = Box::new([]);
+    }
+
+    fn shade(
+        &self,
+        cx: &Lit<'_>,
+        s: &ShadingPoint,
+        near: &[Neighbour<'_, IrradianceRecord>],
+        _: &mut Rng,
+        _: &mut RayCounters,
+    ) -> [f32; 3] {
+        let (mut e, mut wsum) = (Spectrum::ZERO, 0.0f32);
+        for c in near {
+            e += c.weight * Spectrum::from_array(c.record.e);
+            wsum += c.weight;
+        }
+        if wsum <= 0.0 || e == Spectrum::ZERO {
+            return [0.0; 3];
+        }
+        (self.reflectance(cx, s) * e / wsum).to_array()
+    }
+
+    fn reference(&self, cx: &Lit<'_>, s: &ShadingPoint, rng: &mut Rng, rays: &mut RayCounters) -> [f32; 3] {
+        let e = self.gather(cx, s, rng, rays, None);
+        if e == Spectrum::ZERO {
+            return [0.0; 3];
+        }
+        (self.reflectance(cx, s) * e).to_array()
+    }
+
+    fn record_bytes(&self, record: &IrradianceRecord) -> usize {
+        std::mem::size_of::<IrradianceRecord>() + std::mem::size_of_val(&*record.radiance)
+    }
+}
