@@ -66,6 +66,13 @@ pub struct BenchArgs {
     /// Pixel samples of the `directlighting` / `path` rows (comma-separated).
     #[arg(long, value_delimiter = ',', default_value = "16")]
     pub spp: Vec<u32>,
+    /// pbrt-v2's binary, for `--integrator irradiancecache`: its `irradiancecache` against cachert's on the
+    /// Cornell box, error against CPU time.
+    #[arg(long)]
+    pub pbrt_v2: Option<PathBuf>,
+    /// With `--integrator irradiancecache`: write the error-versus-CPU-time chart here (SVG).
+    #[arg(long)]
+    pub chart: Option<PathBuf>,
 }
 
 /// The scenes `directlighting` and `path` are timed on (the bench scenes with light sources).
@@ -133,7 +140,7 @@ pub struct BenchRow {
 }
 
 /// CPU seconds (user + system) this process has used so far, from /proc (Linux); `None` elsewhere.
-fn process_cpu_secs() -> Option<f64> {
+pub(crate) fn process_cpu_secs() -> Option<f64> {
     let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
     let after = stat.rsplit_once(')')?.1;
     let f: Vec<&str> = after.split_whitespace().collect();
@@ -148,7 +155,7 @@ fn clock_ticks_per_sec() -> f64 {
 }
 
 /// CPU seconds (user + system) used by this process's waited-for children so far.
-fn children_cpu_secs() -> f64 {
+pub(crate) fn children_cpu_secs() -> f64 {
     // SAFETY: getrusage writes into the zeroed struct we pass.
     let mut ru: libc::rusage = unsafe { std::mem::zeroed() };
     if unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut ru) } != 0 {
@@ -208,6 +215,9 @@ pub fn run(args: &BenchArgs) -> Result<String> {
     }
     if args.nsamples.contains(&0) {
         return Err(Error::usage("--nsamples: ray counts must be at least 1"));
+    }
+    if args.integrator == "irradiancecache" {
+        return super::irc_peer::run(args);
     }
     // pbrt-v3 runs in each scene's folder, so a relative path must be made absolute first.
     let pbrt = match &args.pbrt {

@@ -6,6 +6,8 @@ pub mod cache_outputs;
 pub mod compare;
 pub mod experiment;
 pub mod info;
+pub mod irc_peer;
+pub mod peer_chart;
 pub mod render;
 
 /// `cachert` — render pbrt-v3 scenes with cache-based algorithms.

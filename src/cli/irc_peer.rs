@@ -1,0 +1,341 @@
+//! `cachert bench --integrator irradiancecache`: cachert's irradiance caching against the best-known open
+//! peer, pbrt-v2's `irradiancecache`, on the Cornell box of `../shared/scenes/bitterli-cornell-box-v3` —
+//! error against pbrt-v3's `path-ref.pfm` (RMSE over the whole image and off the light, HDR-FLIP, mean)
+//! against CPU time, both binaries in the same run on the same machine.
+//!
+//! pbrt-v2 runs on its own translation of the scene (`pbrt-v2/irradiancecache-v2.pbrt`, lowdiscrepancy 64
+//! samples, `maxindirectdepth` 4) at its `minweight` settings 0.2–0.9 and `nsamples` 256–4096; its scene is
+//! copied to a scratch folder with the one parameter changed, and its image is written there. cachert renders
+//! `path-ref.pbrt` with the Integrator replaced by `irradiancecache` `output full` `maxdepth 4` (the same
+//! light paths as pbrt-v3 `path` maxdepth 5) and the same Sampler, over cache budgets and placements, in
+//! this process. CPU time is user + system of the whole render (pbrt-v2: its child process, parsing
+//! included; cachert: parsing to image). A benchmark prints figures from one run and asserts nothing.
+
+use std::fmt::Write as _;
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::error::{Error, Result, Warnings};
+use crate::image::{self, Image};
+use crate::metrics::{Metric, compare};
+use crate::render::{RenderSettings, render};
+use crate::scene::{LoadOptions, load_str};
+
+use super::bench::{BenchArgs, children_cpu_secs, process_cpu_secs};
+
+/// The scene folder under `--scenes`.
+const SCENE: &str = "bitterli-cornell-box-v3";
+/// pbrt-v2's settings: (minweight, nsamples). Its defaults are 0.5 and 4096.
+const PBRT_V2_SETTINGS: [(f32, u32); 7] =
+    [(0.2, 4096), (0.5, 4096), (0.7, 4096), (0.9, 4096), (0.5, 256), (0.5, 1024), (0.5, 2048)];
+/// cachert's cache budgets.
+const BUDGETS: [usize; 4] = [1000, 2000, 4000, 8000];
+/// cachert's placements.
+const PLACEMENTS: [&str; 4] = ["vgc+dgs", "vgc", "im", "sd"];
+
+/// One point of the error-versus-time chart.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct PeerRow {
+    /// `pbrt-v2` or `cachert`.
+    pub renderer: String,
+    /// The series: `minweight` / `nsamples` sweeps of pbrt-v2, the placement of cachert.
+    pub series: String,
+    /// The setting that varies along the series (`minweight 0.5`, `caches 4000`).
+    pub setting: String,
+    /// User + system CPU seconds of the whole render.
+    pub cpu_s: f64,
+    /// Wall seconds.
+    pub wall_s: f64,
+    /// Wall seconds making the caches: pbrt-v2's priming pass, cachert's cache evaluation (both stages).
+    pub caching_wall_s: Option<f64>,
+    /// Wall seconds of the per-pixel work after that: pbrt-v2's render pass (direct light, lookups and the
+    /// records it adds), cachert's direct-light term plus shading from the caches.
+    pub pixels_wall_s: Option<f64>,
+    /// RMSE over all pixels and channels against `path-ref.pfm`.
+    pub rmse: f64,
+    /// RMSE without the emitter and its 1-pixel border.
+    pub rmse_off_light: f64,
+    /// Mean HDR-FLIP against `path-ref.pfm`.
+    pub flip: f64,
+    /// Image mean relative to the reference's, percent.
+    pub mean_pct: f64,
+    /// Off-light mean relative to the reference's, percent.
+    pub mean_off_light_pct: f64,
+}
+
+/// The pixels off the emitter: those whose 3×3 neighbourhood (wrapping at the borders) holds no reference
+/// pixel with mean RGB above 1 — the definition of `../shared/tools/pbrt-v2/compare.py`, so figures agree
+/// with its measured table.
+pub fn off_light_mask(reference: &Image) -> Vec<bool> {
+    let (w, h) = (reference.width, reference.height);
+    let light: Vec<bool> = reference.pixels.iter().map(|p| (p[0] + p[1] + p[2]) / 3.0 > 1.0).collect();
+    let mut keep = vec![true; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            for dy in [h - 1, 0, 1] {
+                for dx in [w - 1, 0, 1] {
+                    if light[((y + dy) % h) * w + (x + dx) % w] {
+                        keep[y * w + x] = false;
+                    }
+                }
+            }
+        }
+    }
+    keep
+}
+
+/// (RMSE, mean) over the pixels where `mask` holds, and the reference's mean there.
+fn masked(test: &Image, reference: &Image, mask: &[bool]) -> (f64, f64, f64) {
+    let (mut se, mut sum, mut sum_ref, mut n) = (0.0f64, 0.0f64, 0.0f64, 0usize);
+    for ((a, b), &m) in test.pixels.iter().zip(&reference.pixels).zip(mask) {
+        if m {
+            for k in 0..3 {
+                se += (a[k] as f64 - b[k] as f64).powi(2);
+                sum += a[k] as f64;
+                sum_ref += b[k] as f64;
+                n += 1;
+            }
+        }
+    }
+    let n = n.max(1) as f64;
+    ((se / n).sqrt(), sum / n, sum_ref / n)
+}
+
+/// The error figures of `test` against `reference`.
+fn judge(test: &Image, reference: &Image, mask: &[bool]) -> Result<(f64, f64, f64, f64, f64)> {
+    let all = vec![true; mask.len()];
+    let (rmse, mean, mean_ref) = masked(test, reference, &all);
+    let (rmse_off, mean_off, mean_off_ref) = masked(test, reference, mask);
+    let flip = compare(test, reference, &[Metric::Flip])?[0].1;
+    let pct = |a: f64, b: f64| if b > 0.0 { 100.0 * (a / b - 1.0) } else { 0.0 };
+    Ok((rmse, rmse_off, flip, pct(mean, mean_ref), pct(mean_off, mean_off_ref)))
+}
+
+/// `text` with the first occurrence of `"TYPE NAME" [old]` replaced by `[value]`.
+fn set_param(text: &str, decl: &str, value: &str) -> Result<String> {
+    let Some(at) = text.find(decl) else { return Err(Error::usage(format!("no {decl} in the pbrt-v2 scene"))) };
+    let rest = &text[at + decl.len()..];
+    let Some(close) = rest.find(']').filter(|&c| rest[..c].trim_start().starts_with('[')) else {
+        return Err(Error::usage(format!("{decl} has no [value] in the pbrt-v2 scene")));
+    };
+    Ok(format!("{}{decl} [{value}{}", &text[..at], &rest[close..]))
+}
+
+/// The wall seconds pbrt-v2's progress bar printed for the phase whose bar starts with `phase` (its last
+/// update ends in `(12.3s)`).
+fn phase_secs(progress: &str, phase: &str) -> Option<f64> {
+    let bar = progress.split(['\r', '\n']).rfind(|s| s.trim_start().starts_with(phase))?;
+    let inner = bar.rsplit_once('(')?.1.split_once("s)")?.0;
+    inner.trim().parse().ok()
+}
+
+/// What one pbrt-v2 run gave: image, CPU and wall seconds, and its priming and render passes' wall seconds.
+struct V2Run {
+    image: Image,
+    cpu: f64,
+    wall: f64,
+    priming: Option<f64>,
+    render: Option<f64>,
+}
+
+/// Runs pbrt-v2 on `text` in `scratch`.
+fn run_pbrt_v2(pbrt: &Path, text: &str, scratch: &Path, threads: usize) -> Result<V2Run> {
+    let scene = scratch.join("scene-v2.pbrt");
+    let out = scratch.join("pbrt-v2.pfm");
+    std::fs::write(&scene, text).map_err(|e| Error::file(&scene, e.to_string()))?;
+    let (before, t) = (children_cpu_secs(), Instant::now());
+    let status = Command::new(pbrt)
+        .current_dir(scratch)
+        .args(["--ncores", &threads.to_string(), "--outfile"])
+        .arg(&out)
+        .arg(&scene)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .output()
+        .map_err(|e| Error::usage(format!("cannot run pbrt-v2 at {}: {e}", pbrt.display())))?;
+    let (cpu, wall) = (children_cpu_secs() - before, t.elapsed().as_secs_f64());
+    if !status.status.success() {
+        return Err(Error::usage(format!(
+            "pbrt-v2 failed ({}): {}",
+            status.status,
+            String::from_utf8_lossy(&status.stderr).trim()
+        )));
+    }
+    let progress = format!("{}{}", String::from_utf8_lossy(&status.stdout), String::from_utf8_lossy(&status.stderr));
+    Ok(V2Run {
+        image: image::read(&out)?,
+        cpu,
+        wall,
+        priming: phase_secs(&progress, "Priming irradiance cache"),
+        render: phase_secs(&progress, "Rendering"),
+    })
+}
+
+/// cachert's scene: `path-ref.pbrt` rendering `irradiancecache` `output full` `maxdepth 4` with pbrt-v2's
+/// Sampler (lowdiscrepancy, 64 pixel samples).
+fn cachert_scene(path_ref: &str) -> Result<String> {
+    let mut out = String::new();
+    let (mut integrator, mut sampler) = (false, false);
+    for line in path_ref.lines() {
+        if line.starts_with("Integrator ") {
+            out.push_str("Integrator \"irradiancecache\" \"string output\" \"full\" \"integer maxdepth\" [4]\n");
+            integrator = true;
+        } else if line.starts_with("Sampler ") {
+            out.push_str("Sampler \"lowdiscrepancy\" \"integer pixelsamples\" [64]\n");
+            sampler = true;
+        } else {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    if !(integrator && sampler) {
+        return Err(Error::usage("path-ref.pbrt: no Integrator or Sampler line to replace"));
+    }
+    Ok(out)
+}
+
+/// Runs the comparison; returns the table (and writes `--json` and `--chart`).
+pub fn run(args: &BenchArgs) -> Result<String> {
+    let Some(pbrt_v2) = &args.pbrt_v2 else {
+        return Err(Error::usage("--integrator irradiancecache needs --pbrt-v2 PATH (pbrt-v2's binary)"));
+    };
+    // pbrt-v2 runs in a scratch folder, so a relative path must be made absolute first.
+    let pbrt_v2 = &std::fs::canonicalize(pbrt_v2).map_err(|e| Error::file(pbrt_v2, format!("pbrt-v2 binary: {e}")))?;
+    let dir = args.scenes.join(SCENE);
+    let reference = image::read(&dir.join("path-ref.pfm"))?;
+    let mask = off_light_mask(&reference);
+    let v2_path = dir.join("pbrt-v2/irradiancecache-v2.pbrt");
+    let v2_text = std::fs::read_to_string(&v2_path).map_err(|e| Error::file(&v2_path, e.to_string()))?;
+    let ref_path = dir.join("path-ref.pbrt");
+    let ref_text = std::fs::read_to_string(&ref_path).map_err(|e| Error::file(&ref_path, e.to_string()))?;
+    let text = cachert_scene(&ref_text)?;
+    let scratch = std::env::temp_dir().join(format!("cachert-irc-peer-{}", std::process::id()));
+    std::fs::create_dir_all(&scratch).map_err(|e| Error::file(&scratch, e.to_string()))?;
+    let mut rows = Vec::new();
+    let mut row = |renderer: &str,
+                   series: &str,
+                   setting: String,
+                   img: &Image,
+                   times: [f64; 2],
+                   split: [Option<f64>; 2]|
+     -> Result<()> {
+        let [cpu, wall] = times;
+        let (rmse, rmse_off_light, flip, mean_pct, mean_off_light_pct) = judge(img, &reference, &mask)?;
+        let r = PeerRow {
+            renderer: renderer.into(),
+            series: series.into(),
+            setting,
+            cpu_s: cpu,
+            wall_s: wall,
+            caching_wall_s: split[0],
+            pixels_wall_s: split[1],
+            rmse,
+            rmse_off_light,
+            flip,
+            mean_pct,
+            mean_off_light_pct,
+        };
+        eprintln!("{}", format_row(&r));
+        rows.push(r);
+        Ok(())
+    };
+    for (minweight, nsamples) in PBRT_V2_SETTINGS {
+        let t = set_param(&v2_text, "\"float minweight\"", &minweight.to_string())?;
+        let t = set_param(&t, "\"integer nsamples\"", &nsamples.to_string())?;
+        let v = run_pbrt_v2(pbrt_v2, &t, &scratch, args.nthreads)?;
+        let series = if nsamples == 4096 { "pbrt-v2 minweight" } else { "pbrt-v2 nsamples" };
+        let setting = format!("minweight {minweight} nsamples {nsamples}");
+        row("pbrt-v2", series, setting, &v.image, [v.cpu, v.wall], [v.priming, v.render])?;
+    }
+    let _ = std::fs::remove_dir_all(&scratch);
+    for placement in PLACEMENTS {
+        for caches in BUDGETS {
+            let settings = RenderSettings {
+                threads: Some(args.nthreads),
+                set: vec![("placement".into(), placement.into()), ("caches".into(), caches.to_string())],
+                ..Default::default()
+            };
+            let (cpu0, t) = (process_cpu_secs().unwrap_or(0.0), Instant::now());
+            let loaded = load_str(&text, &ref_path, LoadOptions::default())?;
+            let out = render(&loaded.scene, loaded.integrator.as_ref(), &settings, &mut Warnings::default())?;
+            let (cpu, wall) = (process_cpu_secs().unwrap_or(0.0) - cpu0, t.elapsed().as_secs_f64());
+            let split = out.cache.as_ref().map(|c| {
+                let t = &c.stats.times;
+                [t.initial_computation + t.adaptive_computation, t.render + t.per_pixel_term]
+            });
+            let split = split.map_or([None, None], |[a, b]| [Some(a), Some(b)]);
+            row("cachert", placement, format!("caches {caches}"), &out.image, [cpu, wall], split)?;
+        }
+    }
+    if let Some(json) = &args.json {
+        let s = serde_json::to_string_pretty(&rows).map_err(|e| Error::usage(e.to_string()))?;
+        std::fs::write(json, s + "\n").map_err(|e| Error::file(json, e.to_string()))?;
+    }
+    if let Some(chart) = &args.chart {
+        super::peer_chart::write(&rows, chart)?;
+    }
+    Ok(table(&rows))
+}
+
+fn format_row(r: &PeerRow) -> String {
+    format!(
+        "| {} | {} | {} | {:.1} | {:.1} | {} + {} | {:.5} | {:.5} | {:.4} | {:+.2}% | {:+.2}% |",
+        r.renderer,
+        r.series,
+        r.setting,
+        r.cpu_s,
+        r.wall_s,
+        r.caching_wall_s.map_or("?".into(), |s| format!("{s:.1}")),
+        r.pixels_wall_s.map_or("?".into(), |s| format!("{s:.1}")),
+        r.rmse,
+        r.rmse_off_light,
+        r.flip,
+        r.mean_pct,
+        r.mean_off_light_pct
+    )
+}
+
+fn table(rows: &[PeerRow]) -> String {
+    let mut s = String::from(
+        "| renderer | series | setting | CPU s | wall s | wall s: caching + pixels | RMSE | RMSE off-light | HDR-FLIP | mean | off-light mean |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        let _ = writeln!(s, "{}", format_row(r));
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_parameter_value_is_replaced_in_place() {
+        let t = "SurfaceIntegrator \"irradiancecache\" \"float minweight\" [0.5] \"integer nsamples\" [4096]\n";
+        let t = set_param(t, "\"float minweight\"", "0.2").unwrap();
+        assert_eq!(t, "SurfaceIntegrator \"irradiancecache\" \"float minweight\" [0.2] \"integer nsamples\" [4096]\n");
+        assert!(set_param(&t, "\"float nope\"", "1").is_err());
+    }
+
+    #[test]
+    fn the_phase_time_is_the_last_update_of_its_bar() {
+        let out = "Priming irradiance cache: [+   ]  (1.0s)\rPriming irradiance cache: [++++]  (19.0s)\n\
+                   Rendering: [++] (3.2s)\n";
+        assert_eq!(phase_secs(out, "Priming irradiance cache"), Some(19.0));
+        assert_eq!(phase_secs(out, "Rendering"), Some(3.2));
+        assert_eq!(phase_secs(out, "Parsing"), None);
+    }
+
+    #[test]
+    fn the_off_light_mask_leaves_out_the_light_and_its_border() {
+        let mut im = Image::new(5, 5);
+        im.set(2, 2, [3.0; 3]);
+        let keep = off_light_mask(&im);
+        assert_eq!(keep.iter().filter(|k| !**k).count(), 9);
+        assert!(keep[0] && !keep[6] && !keep[12] && !keep[18] && keep[24]);
+    }
+}
