@@ -4,8 +4,9 @@
 //! (§3.2–3.3; n = 64: 4096 directions). Each direction is one path: the first hit's emission is left out
 //! (it is direct light at the cache), every later vertex adds next-event estimation from one light chosen
 //! by power (pbrt-v3's `EstimateDirect`, MIS between light and BSDF sampling), the path continues by BSDF
-//! sampling, emitted radiance found after a specular bounce is added, and Russian roulette starts after the
-//! third bounce (pbrt-v3 `path`'s rule). `maxdepth` counts the vertices that sample a light, as pbrt-v2's
+//! sampling (also past the last light-sampling vertex when the bounce is specular, for the emission it
+//! finds, as pbrt-v3 `path` does), emitted radiance found after a specular bounce is added, and Russian
+//! roulette starts after the third bounce (pbrt-v3 `path`'s rule). `maxdepth` counts the vertices that sample a light, as pbrt-v2's
 //! `maxindirectdepth` does: with the per-pixel direct term of `output full` the light paths are those of
 //! pbrt-v3 `path` with `maxdepth + 1`. A ray that leaves the scene at the first hit brings no light (an
 //! infinite light's radiance at the cache is direct light, as in pbrt-v2's irradiance cache).
@@ -168,6 +169,11 @@ impl IrradianceCache {
             if specular {
                 l += beta * sh.lights.emitted(&si, -ray.d);
             }
+            // Past the last light-sampling vertex a path goes on only after a specular bounce, for the
+            // emission it finds (as pbrt-v3 path does after its last vertex).
+            if vertices >= self.max_depth {
+                break;
+            }
             let Some(bsdf) = sh.bsdf(&si) else {
                 passes += 1;
                 if passes > MAX_PASS_THROUGH {
@@ -185,15 +191,15 @@ impl IrradianceCache {
                 l += beta * estimate_direct(scene, sh, &x, light, u_light, u_scatter, rays) / pmf;
             }
             vertices += 1;
-            if vertices >= self.max_depth {
-                break;
-            }
             let Some(bs) = bsdf.sample_f(wo, rng.uniform2(), BxdfFlags::ALL) else { break };
             if bs.f == Spectrum::ZERO || bs.pdf <= 0.0 {
                 break;
             }
-            beta *= bs.f * bs.wi.dot(bsdf.shading_normal()).abs() / bs.pdf;
             specular = bs.sampled.contains(BxdfFlags::SPECULAR);
+            if vertices >= self.max_depth && !specular {
+                break;
+            }
+            beta *= bs.f * bs.wi.dot(bsdf.shading_normal()).abs() / bs.pdf;
             ray = si.spawn_ray(bs.wi);
             // pbrt-v3 path's Russian roulette (after the third bounce, throughput below 1).
             let rr = beta.max_element();
