@@ -169,13 +169,17 @@ fn closed_furnace_with_russian_roulette_is_the_series_within_its_noise() {
 }
 
 #[test]
-fn an_outward_facing_sphere_light_does_not_light_its_inside() {
+fn an_outward_facing_sphere_light_does_not_light_its_inside_unless_two_sided() {
     // pbrt-v3's diffuse area light emits on the side of the surface normal only; a sphere's normals point out,
     // so without ReverseOrientation nothing inside is lit: every pixel is exactly zero, in both outputs.
     for o in ["indirect", "full"] {
         let out = run(&furnace(false, 8), &[("placement", "none"), ("gather", "8"), ("output", o)]).unwrap();
         assert!(out.image.pixels.iter().all(|p| *p == [0.0; 3]), "{o}: {:?}", range(&out.image));
     }
+    // A two-sided light emits inside too: the closed form again.
+    let two_sided = furnace(false, 8).replace("\"rgb L\"", "\"bool twosided\" \"true\" \"rgb L\"");
+    let out = run(&two_sided, &[("placement", "none"), ("gather", "8")]).unwrap();
+    assert_all_near("two-sided", &out.image, furnace_indirect(8, 3));
 }
 
 #[test]
