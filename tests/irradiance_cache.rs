@@ -1,6 +1,6 @@
-//! Behaviour of the `irradiancecache` integrator (issue 11): closed forms in a closed furnace and under an
-//! open sky, every placement converging to the per-sample reference, pbrt-v3's `path` on the Cornell box,
-//! finite images on every third-party scene, bad input, determinism and the cache statistics.
+//! Behaviour of the `irradiancecache` integrator (issue 11): closed forms in a closed furnace, under an open sky
+//! and beside a mirror wall, every placement converging to the per-sample reference, pbrt-v3's `path` on the
+//! Cornell box, finite images on every third-party scene, bad input, determinism and the cache statistics.
 //!
 //! The closed furnace (camera inside a matte sphere of albedo ρ whose inside emits L) is exact here, not
 //! just in expectation: from a point on a sphere, sampling the sphere by area gives the estimator
