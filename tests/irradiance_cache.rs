@@ -7,12 +7,11 @@
 //! (ρ/π)·L·cos θ_x cos θ_y·A/d² = ρL for every sample (a chord has cos θ_x = cos θ_y = d/2R), cosine
 //! sampling of a Lambertian BSDF gives ρL too, MIS weights sum to one, and the path throughput after k
 //! bounces is exactly ρ^k; Russian roulette starts only after the fourth vertex. So up to `maxdepth` 4 every
-//! pixel of every placement equals the closed form to float rounding. The only other factor is the
-//! gather's quadrature: E = (2π/n²) Σ_k L_k cos θ_k over the centres of the n×n equal-area cells. On the
-//! concentric map the cell centres lie on square rings of radius r_i = (2i+1)/n with 8i+4 cells each and
-//! cos θ = 1 − r², so Σ_k cos θ_k = n² − Σ_i (8i+4)(2i+1)²/n² = n²/2 + 1: a uniform incident radiance is
-//! integrated as π·(1 + 2/n²) instead of π (+3.1 % at n = 8, +0.05 % at the default 64). For odd n the centre
-//! cell sits at r = 0 and the rings are r_i = 2i/n with 8i cells: Σ_k cos θ_k = n²/2 + 1 − 1/(2n²).
+//! pixel of every placement equals the closed form to float rounding. The gather's quadrature adds nothing:
+//! E = π · Σ_k L_k cos θ_k / Σ_k cos θ_k over the centres of the n×n equal-area cells, so a uniform incident
+//! radiance integrates to exactly π at every grid size (the plain (2π/n²) Σ_k cos θ_k would give π·(1 + 2/n²)
+//! for even n: on the concentric map the cell centres lie on square rings of radius (2i+1)/n with 8i+4 cells
+//! each and cos θ = 1 − r²).
 
 mod common;
 
@@ -75,16 +74,9 @@ fn furnace(reverse: bool, res: u32) -> String {
     )
 }
 
-/// The gather's quadrature factor on an `n`×`n` grid: Σ_k cos θ_k · 2/n² = 1 + 2/n², less 1/n⁴ for odd n
-/// (module doc).
-fn quadrature(n: u32) -> f64 {
-    let n2 = f64::from(n * n);
-    1.0 + 2.0 / n2 - if n % 2 == 1 { 1.0 / (n2 * n2) } else { 0.0 }
-}
-
-/// The furnace's indirect image: ρ/π · E with E = π·Q(n)·L·Σ_{i=1..d} ρ^i.
-fn furnace_indirect(n: u32, d: u32) -> f64 {
-    RHO * quadrature(n) * (1..=d).map(|i| L * RHO.powi(i as i32)).sum::<f64>()
+/// The furnace's indirect image: ρ/π · E with E = π·L·Σ_{i=1..d} ρ^i (at every grid size: module doc).
+fn furnace_indirect(d: u32) -> f64 {
+    RHO * (1..=d).map(|i| L * RHO.powi(i as i32)).sum::<f64>()
 }
 
 /// Smallest and largest channel value of `im`.
@@ -126,11 +118,11 @@ fn closed_furnace_indirect_is_the_geometric_series_for_every_depth_and_placement
                 let (gather, depth) = (n.to_string(), d.to_string());
                 let set = [("placement", p), ("caches", "20"), ("gather", &gather), ("maxdepth", &depth)];
                 let out = run(&furnace(true, 16), &set).unwrap();
-                assert_all_near(&format!("{p} gather {n} maxdepth {d}"), &out.image, furnace_indirect(n, d));
+                assert_all_near(&format!("{p} gather {n} maxdepth {d}"), &out.image, furnace_indirect(d));
             }
         }
     }
-    // Gather 1 is the single direction along the normal: E = 2π·L_in, Q = 2. One path per cache does not
+    // Gather 1 is the single direction along the normal: E = π·L_in. One path per cache does not
     // average out the rare partial loss of a light sample (assert_all_near), which then reaches every pixel
     // the cache serves (−5e-4 measured): the mean is checked, with the same tolerance.
     for d in 1..=4u32 {
@@ -138,18 +130,18 @@ fn closed_furnace_indirect_is_the_geometric_series_for_every_depth_and_placement
             let depth = d.to_string();
             let set = [("placement", p), ("caches", "20"), ("gather", "1"), ("maxdepth", &depth)];
             let m = common::mean(&run(&furnace(true, 16), &set).unwrap().image);
-            let expected = furnace_indirect(1, d);
+            let expected = furnace_indirect(d);
             eprintln!("{p} gather 1 maxdepth {d}: mean {m:.6} vs {expected:.6}");
             assert!((m - expected).abs() < 1e-4 * expected, "{p} gather 1 maxdepth {d}: {m} vs {expected}");
         }
     }
-    // The default gather (64: Q = 1 + 2/4096) and maxdepth (3): ρ·L·(ρ + ρ² + ρ³) = 0.4375 · Q.
+    // The default gather (64) and maxdepth (3): ρ·L·(ρ + ρ² + ρ³) = 0.4375.
     let out = run(&furnace(true, 8), &[("caches", "10")]).unwrap();
-    assert_all_near("defaults", &out.image, 0.4375 * quadrature(64));
+    assert_all_near("defaults", &out.image, 0.4375);
     // Every other placement, at the default depth.
     for p in &PLACEMENTS[1..] {
         let out = run(&furnace(true, 16), &[("placement", p), ("caches", "30"), ("gather", "8")]).unwrap();
-        assert_all_near(p, &out.image, furnace_indirect(8, 3));
+        assert_all_near(p, &out.image, furnace_indirect(3));
     }
 }
 
@@ -160,7 +152,7 @@ fn closed_furnace_with_russian_roulette_is_the_series_within_its_noise() {
     // pixel spread of the reference at 16×16 px is σ ≈ 0.01 (measured), so the mean over 256 independent
     // pixels has σ ≈ 0.0007: allow 0.004 (≈ 6σ, under 1 %).
     let out = run(&furnace(true, 16), &[("placement", "none"), ("gather", "8"), ("maxdepth", "6")]).unwrap();
-    let expected = furnace_indirect(8, 6);
+    let expected = furnace_indirect(6);
     let m = common::mean(&out.image);
     let sd = (out.image.pixels.iter().map(|p| (f64::from(p[0]) - m).powi(2)).sum::<f64>() / 256.0).sqrt();
     eprintln!("maxdepth 6: mean {m:.5} (pixel σ {sd:.5}) vs {expected:.5}");
@@ -179,26 +171,26 @@ fn an_outward_facing_sphere_light_does_not_light_its_inside_unless_two_sided() {
     // A two-sided light emits inside too: the closed form again.
     let two_sided = furnace(false, 8).replace("\"rgb L\"", "\"bool twosided\" \"true\" \"rgb L\"");
     let out = run(&two_sided, &[("placement", "none"), ("gather", "8")]).unwrap();
-    assert_all_near("two-sided", &out.image, furnace_indirect(8, 3));
+    assert_all_near("two-sided", &out.image, furnace_indirect(3));
 }
 
 #[test]
 fn closed_furnace_full_adds_the_seen_emission_and_direct_light() {
     // output full = L (the camera sees the emitting inside) + ρL (direct light, exact as above) + the cached
-    // indirect light; with Q = 1 this is L·Σ_{i=0..d+1} ρ^i, pbrt-v3 `path` with maxdepth d + 1.
+    // indirect light: L·Σ_{i=0..d+1} ρ^i, pbrt-v3 `path` with maxdepth d + 1.
     for d in 1..=3u32 {
         let depth = d.to_string();
         for p in ["none", "vgc+dgs"] {
             let set = [("placement", p), ("caches", "20"), ("gather", "8"), ("maxdepth", &depth), ("output", "full")];
             let out = run(&furnace(true, 8), &set).unwrap();
-            let expected = L + RHO * L + furnace_indirect(8, d);
+            let expected = L + RHO * L + furnace_indirect(d);
             assert_all_near(&format!("full {p} maxdepth {d}"), &out.image, expected);
         }
     }
-    // At the default gather (Q = 1.0005) and maxdepth 3 the image is within 0.02 % of the series of pbrt-v3
-    // `path` with maxdepth 4, L·(1 + ρ + ρ² + ρ³ + ρ⁴) = 1.9375.
+    // At the default gather and maxdepth 3 the image is the series of pbrt-v3 `path` with maxdepth 4,
+    // L·(1 + ρ + ρ² + ρ³ + ρ⁴) = 1.9375.
     let out = run(&furnace(true, 8), &[("caches", "10"), ("output", "full")]).unwrap();
-    assert_all_near("full, defaults", &out.image, L + RHO * L + furnace_indirect(64, 3));
+    assert_all_near("full, defaults", &out.image, L + RHO * L + furnace_indirect(3));
     let series: f64 = (0..=4).map(|i| L * RHO.powi(i)).sum();
     let m = common::mean(&out.image);
     assert!((m - series).abs() < 2e-4 * series, "{m} vs {series}");
@@ -425,7 +417,7 @@ fn a_budget_of_zero_is_an_error_and_one_cache_is_enough_in_the_furnace() {
     for p in &PLACEMENTS[1..] {
         let out = run(&furnace(true, 16), &[("placement", p), ("caches", "1"), ("gather", "8")]).unwrap();
         assert_eq!(out.cache.as_ref().unwrap().stats.total_caches, 1, "{p}");
-        assert_all_near(&format!("{p}, one cache"), &out.image, furnace_indirect(8, 3));
+        assert_all_near(&format!("{p}, one cache"), &out.image, furnace_indirect(3));
     }
 }
 
@@ -436,7 +428,7 @@ fn more_caches_than_pixels_caches_every_pixel_with_a_note() {
         let c = out.cache.as_ref().unwrap();
         assert_eq!(c.stats.total_caches, 64, "{p}");
         assert!(c.stats.notes.iter().any(|n| n.contains("every valid pixel")), "{p}: {:?}", c.stats.notes);
-        assert_all_near(&format!("{p}, 1000 caches"), &out.image, furnace_indirect(8, 3));
+        assert_all_near(&format!("{p}, 1000 caches"), &out.image, furnace_indirect(3));
     }
 }
 
@@ -556,11 +548,12 @@ fn mirror_wall(integrator: &str) -> String {
 }
 
 /// The mirror wall's indirect image: the wall side of the hemisphere (half of every even grid, split along
-/// its symmetry axis) brings Kr·L_sky after one specular bounce, so ρ/π·E = ρ·Kr·L·Q(n)/2 at every pixel.
+/// its symmetry axis, half of its Σ cos θ_k) brings Kr·L_sky after one specular bounce, so ρ/π·E = ρ·Kr·L/2
+/// at every pixel.
 /// (pbrt-v3 agrees: `path` maxdepth 2 minus `directlighting` on this scene is 0.1895 ± noise against
 /// ρ·Kr·L/2 = 0.192, and maxdepth 3 adds nothing.)
-fn mirror_wall_indirect(n: u32) -> f64 {
-    0.6 * 0.8 * 0.8 * quadrature(n) / 2.0
+fn mirror_wall_indirect() -> f64 {
+    0.6 * 0.8 * 0.8 / 2.0
 }
 
 #[test]
@@ -569,21 +562,17 @@ fn sky_seen_in_a_mirror_is_indirect_light() {
         for p in ["none", "vgc+dgs"] {
             let set = [("placement", p), ("caches", "20"), ("gather", "8"), ("maxdepth", d)];
             let out = run(&mirror_wall("Integrator \"irradiancecache\""), &set).unwrap();
-            assert_all_near(&format!("mirror wall {p} maxdepth {d}"), &out.image, mirror_wall_indirect(8));
+            assert_all_near(&format!("mirror wall {p} maxdepth {d}"), &out.image, mirror_wall_indirect());
         }
     }
 }
 
-/// FINDING (src/application/irradiance.rs, `incident`): the gathering path stops right after its
-/// `maxdepth`-th vertex, before tracing the ray a specular last vertex sampled, so emission seen through a
-/// mirror at that vertex is lost. pbrt-v3's `path` (bounce index = our vertex count) traces one more ray
-/// after its last light-sampling vertex and adds the emission it finds when that vertex was specular; with
-/// `maxdepth` 1 (≙ `path` maxdepth 2) this scene gives 0 here but ρ·Kr·L/2 in pbrt-v3 (measured there:
-/// `path` maxdepth 2 − `directlighting` = 0.1895 vs 0.192).
+/// A specular last vertex: the gathering path traces the ray it sampled and adds the emission found, as
+/// pbrt-v3's `path` does after its last light-sampling vertex; with `maxdepth` 1 (≙ `path` maxdepth 2) this
+/// scene gives ρ·Kr·L/2 (pbrt-v3 measured: `path` maxdepth 2 − `directlighting` = 0.1895 vs 0.192).
 #[test]
-#[ignore = "finding: the emission after a specular last vertex is dropped (see the doc comment)"]
 fn sky_seen_in_a_mirror_at_the_last_vertex_is_counted_as_pbrt_v3_path_counts_it() {
     let set = [("placement", "none"), ("gather", "8"), ("maxdepth", "1")];
     let out = run(&mirror_wall("Integrator \"irradiancecache\""), &set).unwrap();
-    assert_all_near("mirror wall maxdepth 1", &out.image, mirror_wall_indirect(8));
+    assert_all_near("mirror wall maxdepth 1", &out.image, mirror_wall_indirect());
 }
