@@ -18,6 +18,8 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use crate::application::Application;
+use crate::application::irradiance::IrradianceCache;
 use crate::error::{Error, Result, Warnings};
 use crate::render::{RenderSettings, render};
 use crate::scene::{LoadOptions, load_str};
@@ -66,11 +68,11 @@ pub struct BenchArgs {
     /// Pixel samples of the `directlighting` / `path` rows (comma-separated).
     #[arg(long, value_delimiter = ',', default_value = "16")]
     pub spp: Vec<u32>,
-    /// pbrt-v2's binary, for `--integrator irradiancecache`: its `irradiancecache` against cachert's on the
-    /// Cornell box, error against CPU time.
+    /// pbrt-v2's binary, for `--integrator` naming cachert's irradiance caching: pbrt-v2's irradiance cache
+    /// against cachert's on the Cornell box, error against CPU time.
     #[arg(long)]
     pub pbrt_v2: Option<PathBuf>,
-    /// With `--integrator irradiancecache`: write the error-versus-CPU-time chart here (SVG).
+    /// With `--integrator` naming irradiance caching: write the error-versus-CPU-time chart here (SVG).
     #[arg(long)]
     pub chart: Option<PathBuf>,
 }
@@ -216,7 +218,7 @@ pub fn run(args: &BenchArgs) -> Result<String> {
     if args.nsamples.contains(&0) {
         return Err(Error::usage("--nsamples: ray counts must be at least 1"));
     }
-    if args.integrator == "irradiancecache" {
+    if args.integrator == <IrradianceCache as Application>::NAME {
         return super::irc_peer::run(args);
     }
     // pbrt-v3 runs in each scene's folder, so a relative path must be made absolute first.

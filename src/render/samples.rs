@@ -4,8 +4,9 @@
 //!
 //! `random` gives independent uniform numbers, as pbrt-v3's random sampler. Every other pbrt-v3 sampler
 //! maps to stratified points: each dimension pair of a pixel's samples is a scrambled (0,2)-sequence visited
-//! in a pixel- and dimension-specific order, and each array is a scrambled (0,2)-net (the same guarantees
-//! pbrt-v3's `02sequence` sampler gives).
+//! in a pixel- and dimension-specific order, and the arrays of a pixel's samples are consecutive blocks of
+//! one scrambled (0,2)-sequence, each sample's block a (0,2)-net of its own (the same guarantees pbrt-v3's
+//! `02sequence` sampler gives: its arrays are stratified across the pixel, not only within a sample).
 
 use crate::sampling::rng::{Rng, hash3, mix64};
 use crate::sampling::sequence::{permute, sobol02};
@@ -26,6 +27,8 @@ pub struct PixelSamples {
 
 /// Stage tag of camera-sample streams in random keys.
 const STAGE_CAMERA: u64 = 0x63616d;
+/// Key tag of the block order of arrays.
+const ARRAY_BLOCKS: u64 = 0x626c_6f63_6b73;
 
 impl PixelSamples {
     /// A stream for `spec`'s sampler with `seed` (call [`PixelSamples::start`] before use).
@@ -77,9 +80,23 @@ impl PixelSamples {
         match self.kind {
             SamplerKind::Random => out.iter_mut().for_each(|u| *u = self.rng.uniform2()),
             SamplerKind::Stratified => {
-                let k = mix64(self.dim_key() ^ ((self.index as u64) << 17));
-                let s = [(k >> 32) as u32, k as u32];
-                out.iter_mut().enumerate().for_each(|(j, u)| *u = sobol02(j as u32, s));
+                // The arrays of a pixel's samples together are one scrambled (0,2)-sequence: sample i takes
+                // the block of n consecutive points at a permuted block index, so the pixel's n·spp points are
+                // stratified as a whole (as pbrt-v3's samplers stratify arrays across the pixel), and each
+                // block of a power-of-two size is itself a (0,2)-net.
+                let k = self.dim_key();
+                let s = [(k >> 32) as u32, mix64(k) as u32];
+                let n = out.len() as u64;
+                let block = permute(self.index, self.spp, mix64(k ^ ARRAY_BLOCKS) as u32) as u64;
+                if n * self.spp as u64 <= u32::MAX as u64 {
+                    let first = block * n;
+                    out.iter_mut().enumerate().for_each(|(j, u)| *u = sobol02((first + j as u64) as u32, s));
+                } else {
+                    // Beyond 2^32 points per pixel: a (0,2)-net per sample.
+                    let k = mix64(k ^ ((self.index as u64) << 17));
+                    let s = [(k >> 32) as u32, k as u32];
+                    out.iter_mut().enumerate().for_each(|(j, u)| *u = sobol02(j as u32, s));
+                }
             }
         }
     }
