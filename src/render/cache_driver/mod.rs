@@ -132,29 +132,28 @@ fn cache_sample_settings(
         None => {}
     }
     let per_pixel = "it shades \"subpixels\" jittered positions per pixel (set it, or --spp)";
-    if per_pixel_term {
-        // The per-pixel term renders with the scene's Sampler and PixelFilter: they are used.
-        return o;
+    // A per-pixel term renders with the scene's Sampler, PixelFilter and Film settings: only the cached
+    // part leaves them out.
+    if !per_pixel_term {
+        if let Some(loc) = &scene.declared.sampler {
+            let name = &scene.sampler.name;
+            warnings.at(loc, format!("Sampler \"{name}\" is not used by cache-based integrators: {per_pixel}"));
+        }
+        let box_filter = scene.filter.kind == filter::FilterKind::Box && scene.filter.radius == [0.5, 0.5];
+        if let Some(loc) = scene.declared.filter.as_ref().filter(|_| !box_filter) {
+            warnings.at(
+                loc,
+                "PixelFilter is not used by cache-based integrators: the sub-pixel samples of a pixel are averaged (a box filter of radius 0.5)",
+            );
+        }
     }
-    if let Some(loc) = &scene.declared.sampler {
-        warnings
-            .at(loc, format!("Sampler \"{}\" is not used by cache-based integrators: {per_pixel}", scene.sampler.name));
-    }
-    let box_filter = scene.filter.kind == filter::FilterKind::Box && scene.filter.radius == [0.5, 0.5];
-    if let Some(loc) = scene.declared.filter.as_ref().filter(|_| !box_filter) {
-        warnings.at(
-            loc,
-            "PixelFilter is not used by cache-based integrators: the sub-pixel samples of a pixel are averaged (a box filter of radius 0.5)",
-        );
-    }
+    let which = if per_pixel_term { "to the cached light" } else { "by cache-based integrators" };
     if scene.film.scale != 1.0 {
-        warnings.general(format!("Film \"scale\" {} is not applied by cache-based integrators", scene.film.scale));
+        warnings.general(format!("Film \"scale\" {} is not applied {which}", scene.film.scale));
     }
     if scene.film.max_sample_luminance.is_finite() {
-        warnings.general(format!(
-            "Film \"maxsampleluminance\" {} is not applied by cache-based integrators",
-            scene.film.max_sample_luminance
-        ));
+        warnings
+            .general(format!("Film \"maxsampleluminance\" {} is not applied {which}", scene.film.max_sample_luminance));
     }
     o
 }
