@@ -476,6 +476,20 @@ mod tests {
     /// Seed of every random input in these tests.
     const SEED: u64 = 0x5eed_cace;
 
+    #[test]
+    fn the_region_radius_is_the_distance_to_the_kth_other_cache() {
+        let points: Vec<(Vec3A, Vec3A)> =
+            [0.0, 1.0, 3.0, 6.0].iter().map(|&x| (Vec3A::new(x, 0.0, 0.0), Vec3A::Z)).collect();
+        let index = CacheIndex::new(&points, LookupParams::default(), 0.0);
+        assert_eq!(index.region_radius(0, 1), 1.0);
+        assert_eq!(index.region_radius(0, 2), 3.0);
+        assert_eq!(index.region_radius(2, 2), 3.0);
+        assert_eq!(index.region_radius(3, 3), 6.0);
+        // Fewer than k other caches, or no such cache: unbounded.
+        assert_eq!(index.region_radius(0, 4), f32::INFINITY);
+        assert_eq!(index.region_radius(9, 1), f32::INFINITY);
+    }
+
     fn random_unit(r: &mut Rng) -> Vec3A {
         loop {
             let v = Vec3A::new(r.uniform() * 2.0 - 1.0, r.uniform() * 2.0 - 1.0, r.uniform() * 2.0 - 1.0);

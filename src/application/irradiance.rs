@@ -115,11 +115,6 @@ impl IrradianceCache {
         IrradianceCache { dirs, norm, max_depth, output, rho_u }
     }
 
-    /// Number of gathering directions.
-    pub fn directions(&self) -> usize {
-        self.dirs.len()
-    }
-
     /// E at `at` by the n² gathering paths; the luminance of each direction's radiance goes to
     /// `radiance[k]` when given (directions below the surface get 0).
     fn gather(

@@ -20,7 +20,7 @@ use serde::Serialize;
 
 use crate::error::{Error, Result, Warnings};
 use crate::image::{self, Image};
-use crate::metrics::{Metric, compare};
+use crate::metrics::{Metric, compare, rmse};
 use crate::render::{RenderSettings, render};
 use crate::scene::{LoadOptions, load_str};
 
@@ -87,7 +87,7 @@ pub fn off_light_mask(reference: &Image) -> Vec<bool> {
     keep
 }
 
-/// (RMSE, mean) over the pixels where `mask` holds, and the reference's mean there.
+/// RMSE and mean over the pixels where `mask` holds, and the reference's mean there.
 fn masked(test: &Image, reference: &Image, mask: &[bool]) -> (f64, f64, f64) {
     let (mut se, mut sum, mut sum_ref, mut n) = (0.0f64, 0.0f64, 0.0f64, 0usize);
     for ((a, b), &m) in test.pixels.iter().zip(&reference.pixels).zip(mask) {
@@ -106,8 +106,9 @@ fn masked(test: &Image, reference: &Image, mask: &[bool]) -> (f64, f64, f64) {
 
 /// The error figures of `test` against `reference`.
 fn judge(test: &Image, reference: &Image, mask: &[bool]) -> Result<(f64, f64, f64, f64, f64)> {
-    let all = vec![true; mask.len()];
-    let (rmse, mean, mean_ref) = masked(test, reference, &all);
+    let rmse = rmse(test, reference)?;
+    let channel_mean = |im: &Image| im.mean().iter().sum::<f64>() / 3.0;
+    let (mean, mean_ref) = (channel_mean(test), channel_mean(reference));
     let (rmse_off, mean_off, mean_off_ref) = masked(test, reference, mask);
     let flip = compare(test, reference, &[Metric::Flip])?[0].1;
     let pct = |a: f64, b: f64| if b > 0.0 { 100.0 * (a / b - 1.0) } else { 0.0 };
@@ -328,6 +329,15 @@ mod tests {
         assert_eq!(phase_secs(out, "Priming irradiance cache"), Some(19.0));
         assert_eq!(phase_secs(out, "Rendering"), Some(3.2));
         assert_eq!(phase_secs(out, "Parsing"), None);
+    }
+
+    #[test]
+    fn whole_image_and_masked_figures_agree_when_the_mask_keeps_everything() {
+        let reference = Image::from_pixels(2, 2, vec![[0.5, 0.2, 0.1], [1.0; 3], [0.0; 3], [0.3, 0.6, 0.9]]).unwrap();
+        let test = Image::from_pixels(2, 2, vec![[0.4, 0.2, 0.3], [1.1; 3], [0.2; 3], [0.3, 0.5, 0.9]]).unwrap();
+        let (rmse, rmse_off, _, pct, pct_off) = judge(&test, &reference, &[true; 4]).unwrap();
+        assert!((rmse - rmse_off).abs() < 1e-7 && rmse > 0.0, "{rmse} {rmse_off}");
+        assert!((pct - pct_off).abs() < 1e-5 && pct > 0.0, "{pct} {pct_off}");
     }
 
     #[test]
