@@ -9,6 +9,7 @@ use rayon::prelude::*;
 
 use crate::scene::Scene;
 use crate::scene::accel::PrimOrigin;
+use crate::scene::geometry::SurfaceInteraction;
 
 /// Index of a pixel in a G-buffer: `y * width + x`.
 pub type PixelId = u32;
@@ -42,6 +43,25 @@ pub struct ShadingPoint {
     pub area_light: Option<u32>,
     /// The primitive seen (shadow rays from here skip it; see `scene::accel::PrimOrigin`).
     pub origin: Option<PrimOrigin>,
+}
+
+impl ShadingPoint {
+    /// The surface interaction at this point, its normals faced toward the camera (the side cache
+    /// applications shade); `None` for a point not made by a camera ray (no primitive).
+    pub fn interaction(&self) -> Option<SurfaceInteraction> {
+        Some(SurfaceInteraction {
+            p: self.p,
+            p_error: self.p_error,
+            t: self.depth,
+            ng: self.ng,
+            ns: self.n,
+            dpdu: self.dpdu,
+            uv: self.uv,
+            material: self.material,
+            area_light: self.area_light,
+            origin: self.origin?,
+        })
+    }
 }
 
 /// The shading point seen through film position `p_film` (raster coordinates of the full image), passing

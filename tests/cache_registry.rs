@@ -87,6 +87,10 @@ impl Application for NormalZ {
     fn record_bytes(&self, _: &ZRecord) -> usize {
         std::mem::size_of::<ZRecord>()
     }
+
+    fn record_bytes_bound(&self) -> usize {
+        std::mem::size_of::<ZRecord>()
+    }
 }
 
 /// A plane (z up) under an emitting sphere, seen from above at 32×32 pixels.

@@ -176,4 +176,8 @@ impl Application for CacheAo {
     fn record_bytes(&self, record: &VisibilityRecord) -> usize {
         std::mem::size_of::<VisibilityRecord>() + std::mem::size_of_val(&*record.mask)
     }
+
+    fn record_bytes_bound(&self) -> usize {
+        std::mem::size_of::<VisibilityRecord>() + self.dirs.len().div_ceil(64) * 8
+    }
 }

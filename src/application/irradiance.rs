@@ -33,7 +33,6 @@ use crate::render::params::{IntegratorParams, Parameter};
 use crate::sampling::warp::equal_area_hemisphere;
 use crate::sampling::{Frame, Rng};
 use crate::scene::Scene;
-use crate::scene::geometry::SurfaceInteraction;
 use crate::scene::ray::{Ray, RayCounters, offset_ray_origin};
 use crate::shading::bsdf::Bsdf;
 use crate::shading::bxdf::BxdfFlags;
@@ -211,7 +210,7 @@ impl IrradianceCache {
 
     /// ρ_hd(ω_o)/π at a sample: the factor that turns irradiance into reflected radiance.
     fn reflectance(&self, cx: &Lit<'_>, s: &ShadingPoint) -> Spectrum {
-        let Some(bsdf) = interaction(s).and_then(|si| cx.shading.bsdf(&si)) else { return Spectrum::ZERO };
+        let Some(bsdf) = s.interaction().and_then(|si| cx.shading.bsdf(&si)) else { return Spectrum::ZERO };
         diffuse_reflectance(&bsdf, s.wo, &self.rho_u) * std::f32::consts::FRAC_1_PI
     }
 }
@@ -226,23 +225,6 @@ fn diffuse_reflectance(bsdf: &Bsdf, wo: Vec3A, u: &[[f32; 2]]) -> Spectrum {
         })
         .map(|(b, scale)| scale * b.rho_hd(wo_l, u))
         .sum()
-}
-
-/// The surface interaction of a shading point, its normals faced toward the camera (the side whose
-/// irradiance the caches hold); `None` for a point not made by a camera ray (no primitive).
-fn interaction(s: &ShadingPoint) -> Option<SurfaceInteraction> {
-    Some(SurfaceInteraction {
-        p: s.p,
-        p_error: s.p_error,
-        t: s.depth,
-        ng: s.ng,
-        ns: s.n,
-        dpdu: s.dpdu,
-        uv: s.uv,
-        material: s.material,
-        area_light: s.area_light,
-        origin: s.origin?,
-    })
 }
 
 impl Application for IrradianceCache {
@@ -357,6 +339,10 @@ impl Application for IrradianceCache {
 
     fn record_bytes(&self, record: &IrradianceRecord) -> usize {
         std::mem::size_of::<IrradianceRecord>() + std::mem::size_of_val(&*record.radiance)
+    }
+
+    fn record_bytes_bound(&self) -> usize {
+        std::mem::size_of::<IrradianceRecord>() + self.dirs.len() * std::mem::size_of::<f32>()
     }
 }
 

@@ -17,6 +17,7 @@
 //! parameter reader `render::params`; never on `placement` or the cache driver.
 
 pub mod ambient_occlusion;
+pub mod importance;
 pub mod irradiance;
 pub mod registry;
 
@@ -86,6 +87,11 @@ pub trait Application: Sync + Sized {
     /// table under the application's name.
     const PARAMETERS: &'static [Parameter];
 
+    /// Whether the `vgc+dgs` placement's discontinuity map has the geometry term G′ (Eq. 3) beside the
+    /// record differences: the paper's finding is that importance caching does better without it. The
+    /// ablations `vgc+dgs:diff` and `vgc+dgs:geom` fix their terms whatever this says.
+    const DGS_GEOMETRY: bool = true;
+
     /// What one cache stores.
     type Record: Send + Sync;
 
@@ -111,6 +117,12 @@ pub trait Application: Sync + Sized {
     /// The per-pixel integrator whose image is added to the cached one, if any (the cached image and the
     /// per-sample reference alike).
     fn per_pixel_term(&self) -> Option<PerPixelTerm> {
+        None
+    }
+
+    /// `Some(why)` when these settings render without caches (a per-sample baseline): the driver then
+    /// shades every sample with [`Application::reference`] whatever the placement, and says why.
+    fn without_caches(&self) -> Option<String> {
         None
     }
 
@@ -152,4 +164,8 @@ pub trait Application: Sync + Sized {
     /// Bytes `record` occupies, heap included (for the memory report; asked before and after
     /// [`Application::finish_record`]).
     fn record_bytes(&self, record: &Self::Record) -> usize;
+
+    /// The most bytes one record can occupy at any time, heap included: the driver refuses a budget whose
+    /// records would not fit in the memory available, before it places anything.
+    fn record_bytes_bound(&self) -> usize;
 }

@@ -9,6 +9,7 @@ use crate::render::params::Parameter;
 
 use super::Application;
 use super::ambient_occlusion::CacheAo;
+use super::importance::ImportanceCache;
 use super::irradiance::IrradianceCache;
 
 /// What is known about a registered application without its type: name, summary, parameter table.
@@ -59,6 +60,7 @@ macro_rules! applications {
 applications! {
     CacheAo,
     IrradianceCache,
+    ImportanceCache,
 }
 
 /// The registered names, comma-separated (for messages).

@@ -79,6 +79,25 @@ pub fn uniform_hemisphere(u: [f32; 2]) -> Vec3A {
     Vec3A::new(r * phi.cos(), r * phi.sin(), z)
 }
 
+/// Uniform direction on the whole sphere, density 1/(4π) (pbrt-v3 `UniformSampleSphere`).
+#[inline]
+pub fn uniform_sphere(u: [f32; 2]) -> Vec3A {
+    let z = 1.0 - 2.0 * u[0];
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * u[1];
+    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// Uniform direction in the cone of half-angle acos(`cos_max`) around +z, density 1/(2π(1 − cos_max))
+/// (pbrt-v3 `UniformSampleCone`).
+#[inline]
+pub fn uniform_cone(u: [f32; 2], cos_max: f32) -> Vec3A {
+    let z = (1.0 - u[0]) + u[0] * cos_max;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * u[1];
+    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
+}
+
 /// Clarberg's equal-area map from [0,1)² to the hemisphere around +z (ALGORITHMS.md §3.2): the concentric
 /// map to the disk, then the Lambert azimuthal equal-area lift z = 1 − r², (x, y) = r·sqrt(2 − r²)·(cos φ,
 /// sin φ). Equal areas of the square map to equal solid angles, so an n×n grid of cells gives n² directions

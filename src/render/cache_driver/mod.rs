@@ -40,13 +40,23 @@ pub fn render_with<A: Application>(
     let app = A::from_params(&p, scene)?;
     let term = app.per_pixel_term();
     let overrides = cache_sample_settings(scene, params, settings, term.is_some(), warnings);
-    let cs = CacheSettings::from_params(&p, &overrides, scene, A::NAME, settings.seed, settings.progress)?;
+    let mut cs = CacheSettings::from_params(&p, &overrides, scene, A::NAME, settings.seed, settings.progress)?;
+    if !A::DGS_GEOMETRY {
+        cs.params.dgs.geometry = false;
+    }
+    let without_caches = app.without_caches();
+    if without_caches.is_some() {
+        cs.placement = Placement::Reference;
+    }
     p.check_overrides(A::NAME)?;
     report_unused(integrator, A::NAME, &settings.set, warnings);
     let cx = app.prepare(scene, warnings)?;
     let mut term_warnings = Warnings::default();
     let run = || -> Result<CachedOutput> {
         let mut out = render_cached(scene, &app, &cx, &cs)?;
+        if let Some(why) = &without_caches {
+            out.stats.notes.push(format!("{why}: every sample is shaded without caches (placement none)"));
+        }
         if let Some(term) = &term {
             let w = &mut term_warnings;
             let (image, rays, secs) = render_per_pixel_term(scene, term.integrator, &term.set, settings, w)?;

@@ -26,7 +26,7 @@ use crate::scene::Scene;
 use crate::scene::ray::RayCounters;
 
 use super::settings::{CacheSettings, Placement};
-use super::stats::{CacheStats, StageTimes, peak_memory_bytes};
+use super::stats::{CacheStats, StageTimes, available_memory_bytes, peak_memory_bytes};
 
 /// What a cache-based render produced besides the image.
 #[derive(Clone, Debug)]
@@ -46,6 +46,9 @@ pub struct CachedOutput {
     /// The per-pixel integrator computing the same image, if the application has one.
     pub baseline: Option<Baseline>,
 }
+
+/// Bytes in a GiB (for messages).
+const GIB: f64 = (1u64 << 30) as f64;
 
 /// Stage tags of random streams.
 const STAGE_RECORD: u64 = 0x7265_636f;
@@ -171,6 +174,18 @@ pub fn render_cached<A: Application>(
             return Err(Error::usage("the cache budget \"caches\" must be at least 1"));
         }
         let total = s.caches.min(g.valid_count);
+        let need = total as u64 * app.record_bytes_bound() as u64;
+        if let Some(avail) = available_memory_bytes()
+            && need > avail
+        {
+            return Err(Error::usage(format!(
+                "{}: {total} caches would need up to {:.2} GiB of records ({} bytes each); {:.2} GiB is available",
+                A::NAME,
+                need as f64 / GIB,
+                app.record_bytes_bound(),
+                avail as f64 / GIB
+            )));
+        }
         if s.caches > g.valid_count {
             stats.notes.push(format!(
                 "{} caches requested but only {} pixels see the scene: every valid pixel becomes a cache",

@@ -100,8 +100,11 @@ impl<'a> Lights<'a> {
     /// cannot be read, is empty or has non-finite texels becomes pbrt-v3's constant L with a warning.
     pub fn build(scene: &'a Scene, warnings: &mut Warnings) -> Result<Lights<'a>> {
         let world_radius = scene.bounds().map_or(0.0, |(lo, hi)| 0.5 * (hi - lo).length());
+        let world_center = scene.bounds().map_or(Vec3A::ZERO, |(lo, hi)| 0.5 * (lo + hi));
         let mut lights = Lights {
             geometry: &scene.geometry,
+            world_center,
+            world_radius,
             entries: Vec::new(),
             infinite: Vec::new(),
             emission: Vec::new(),

@@ -12,6 +12,7 @@ pub mod area;
 mod build;
 pub mod distant;
 pub mod distribution;
+mod emit;
 pub mod envmap;
 pub mod infinite;
 pub mod point;
@@ -28,6 +29,7 @@ use crate::scene::ray::{Ray, offset_ray_origin};
 use crate::shading::Spectrum;
 
 pub use area::{Emission, SurfacePoint};
+pub use emit::{EmitterPoint, LightPathStart};
 pub use select::LightSelect;
 pub use spatial::SpatialSelect;
 
@@ -96,6 +98,10 @@ const NO_LIGHT: u32 = u32::MAX;
 #[derive(Debug)]
 pub struct Lights<'a> {
     geometry: &'a Geometry,
+    /// Centre of the world's bounding sphere (where light paths from distant and infinite lights start).
+    world_center: Vec3A,
+    /// Radius of the world's bounding sphere.
+    world_radius: f32,
     entries: Vec<Entry>,
     infinite: Vec<InfiniteLight>,
     /// Per scene area light: what it emits.

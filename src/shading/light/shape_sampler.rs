@@ -209,6 +209,14 @@ impl ShapeSampler {
         (pdf.is_finite() && pdf > 0.0).then_some((sp, pdf))
     }
 
+    /// A point on `q` from its parametric sampler with its world-area density (pbrt-v3's `Shape::Sample(u)`,
+    /// where light paths start); `None` where the density is 0 or infinite.
+    pub fn sample_area(&self, q: &Quadric, u: [f32; 2]) -> Option<(SurfacePoint, f32)> {
+        let p_obj = sample_object(&q.kind, u);
+        let pdf = self.area_density(q, p_obj);
+        (pdf > 0.0 && pdf.is_finite()).then(|| (Self::world_point(q, p_obj), pdf))
+    }
+
     /// The solid-angle pdf of [`ShapeSampler::sample`] from reference (p, p_error, n) toward a point `hit`
     /// on `q` (world position and normal).
     pub fn pdf_at(&self, q: &Quadric, r: (Vec3A, Vec3A, Vec3A), hit: &SurfacePoint) -> f32 {

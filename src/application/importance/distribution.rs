@@ -1,0 +1,229 @@
+//! STAGE 5 (application, importance caching): one cache's discrete distribution over the VPLs, stored in
+//! about one byte per VPL so that 25K caches × 8192 VPLs × three stored distributions stay under 1 GB
+//! (ALGORITHMS.md §6.3 plans 4 B per entry: 3.3 GB).
+//!
+//! Each weight is quantised to an 8-bit code standing for an integer weight on a logarithmic scale
+//! (4 exponent bits, 4 mantissa bits: 16 values per octave, 3–6 % steps, a 1 : 61 440 range below the largest
+//! weight; smaller weights become 0). Sampling and the pdf read the *integer* weights, so the pdf a draw is
+//! weighted with is exactly the probability it was drawn with (up to 2⁻⁶⁴ from the 64-bit random number):
+//! quantisation changes which VPLs get drawn, never the estimator's expectation. The weights are summed
+//! in blocks of 64 VPLs (a cumulative u64 per block): a draw is a binary search over the blocks and a scan
+//! of at most 64 codes.
+//!
+//! Depends on nothing but std.
+
+/// VPLs per block of the cumulative table.
+const BLOCK: usize = 64;
+
+/// The largest integer weight (code 255).
+const MAX_WEIGHT: u32 = weight_of(255);
+
+/// The integer weight of an 8-bit code: 0 for code 0; else (16 + m)·2^e with e = (c − 1) >> 4 and
+/// m = (c − 1) & 15.
+const fn weight_of(code: u8) -> u32 {
+    if code == 0 {
+        return 0;
+    }
+    let c = (code - 1) as u32;
+    (16 + (c & 15)) << (c >> 4)
+}
+
+/// The weight of every code.
+const WEIGHTS: [u32; 256] = {
+    let mut w = [0u32; 256];
+    let mut c = 0;
+    while c < 256 {
+        w[c] = weight_of(c as u8);
+        c += 1;
+    }
+    w
+};
+
+/// The code whose weight is nearest to `x` (in ratio), for 0 ≤ x ≤ [`MAX_WEIGHT`]; 0 below half the
+/// smallest weight.
+fn code_of(x: f32) -> u8 {
+    if !(x >= 8.0) {
+        return 0;
+    }
+    if x <= 16.0 {
+        return 1;
+    }
+    // Octave e: 16·2^e ≤ x < 32·2^e.
+    let e = ((x / 16.0).log2().floor() as i32).clamp(0, 15) as u32;
+    let m = (x / (1u32 << e) as f32 - 16.0).round().clamp(0.0, 16.0) as u32;
+    let c = if m == 16 { ((e + 1) << 4) + 1 } else { (e << 4) + m + 1 };
+    c.min(255) as u8
+}
+
+/// A quantised discrete distribution over n items.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Quantised {
+    codes: Box<[u8]>,
+    /// cum[b] = Σ of the integer weights of blocks before b; the last entry is the total (> 0).
+    cum: Box<[u64]>,
+    /// Multiplies an integer weight back to the caller's units (for [`Quantised::value`]).
+    scale: f32,
+}
+
+impl Quantised {
+    /// The distribution proportional to `weights` (negative and non-finite values count as 0), quantised;
+    /// `None` when every weight is 0.
+    pub fn new(weights: &[f32]) -> Option<Self> {
+        let max = weights.iter().copied().filter(|w| w.is_finite()).fold(0.0f32, f32::max);
+        if !(max > 0.0) {
+            return None;
+        }
+        let to_int = MAX_WEIGHT as f32 / max;
+        let codes: Box<[u8]> =
+            weights.iter().map(|&w| if w.is_finite() && w > 0.0 { code_of(w * to_int) } else { 0 }).collect();
+        let mut cum = Vec::with_capacity(codes.len().div_ceil(BLOCK) + 1);
+        let mut total = 0u64;
+        cum.push(0);
+        for block in codes.chunks(BLOCK) {
+            total += block.iter().map(|&c| WEIGHTS[c as usize] as u64).sum::<u64>();
+            cum.push(total);
+        }
+        Some(Quantised { codes, cum: cum.into_boxed_slice(), scale: max / MAX_WEIGHT as f32 })
+    }
+
+    /// Number of items.
+    pub fn len(&self) -> usize {
+        self.codes.len()
+    }
+
+    /// Whether there are no items (never true for a built distribution).
+    pub fn is_empty(&self) -> bool {
+        self.codes.is_empty()
+    }
+
+    fn total(&self) -> u64 {
+        self.cum[self.cum.len() - 1]
+    }
+
+    /// The probability of item `j`: exactly the probability [`Quantised::sample`] draws it with.
+    #[inline]
+    pub fn pdf(&self, j: usize) -> f32 {
+        (WEIGHTS[self.codes[j] as usize] as f64 / self.total() as f64) as f32
+    }
+
+    /// The quantised weight of item `j` in the units of the weights it was built from.
+    #[inline]
+    pub fn value(&self, j: usize) -> f32 {
+        WEIGHTS[self.codes[j] as usize] as f32 * self.scale
+    }
+
+    /// Draws an item with 64 uniformly random bits `r`.
+    #[inline]
+    pub fn sample(&self, r: u64) -> usize {
+        // The target integer in [0, total): the high word of r·total.
+        let target = ((r as u128 * self.total() as u128) >> 64) as u64;
+        // The last block whose start is ≤ target (blocks with zero weight are skipped past by the search:
+        // their start equals the next block's).
+        let b = self.cum.partition_point(|&c| c <= target) - 1;
+        let mut acc = self.cum[b];
+        let start = b * BLOCK;
+        let end = (start + BLOCK).min(self.codes.len());
+        for j in start..end {
+            acc += WEIGHTS[self.codes[j] as usize] as u64;
+            if target < acc {
+                return j;
+            }
+        }
+        // Unreachable for target < total; the block's last non-zero item is the safe answer.
+        (start..end).rev().find(|&j| self.codes[j] != 0).unwrap_or(start)
+    }
+
+    /// Bytes this distribution occupies, heap included.
+    pub fn bytes(&self) -> usize {
+        std::mem::size_of::<Self>() + self.codes.len() + self.cum.len() * 8
+    }
+
+    /// The most bytes a distribution over `n` items occupies.
+    pub fn bytes_for(n: usize) -> usize {
+        std::mem::size_of::<Self>() + n + (n.div_ceil(BLOCK) + 1) * 8
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Rng;
+
+    #[test]
+    fn codes_are_monotone_and_round_to_the_nearest_step() {
+        for c in 1..255u8 {
+            assert!(WEIGHTS[c as usize] < WEIGHTS[c as usize + 1], "{c}");
+        }
+        assert_eq!(MAX_WEIGHT, 30 << 15);
+        for c in 1..=255u8 {
+            assert_eq!(code_of(WEIGHTS[c as usize] as f32), c, "exact weights keep their code");
+        }
+        // Every weight from 16 up is within 3.2 % of its code's weight.
+        let mut x = 16.0f32;
+        while x <= MAX_WEIGHT as f32 {
+            let q = WEIGHTS[code_of(x) as usize] as f32;
+            assert!((q / x - 1.0).abs() <= 1.0 / 31.0 + 1e-6, "{x} -> {q}");
+            x *= 1.013;
+        }
+        assert_eq!(code_of(7.9), 0);
+        assert_eq!(code_of(f32::NAN), 0);
+    }
+
+    #[test]
+    fn the_pdf_is_the_probability_of_being_drawn() {
+        // Enumerate the draw over evenly spaced 64-bit numbers: each item's share of them is its pdf.
+        let w: Vec<f32> = (0..200).map(|j| if j % 7 == 3 { 0.0 } else { ((j * 37 % 101) as f32).powi(2) }).collect();
+        let d = Quantised::new(&w).unwrap();
+        let n = 1u64 << 20;
+        let mut hits = vec![0u64; w.len()];
+        for i in 0..n {
+            hits[d.sample(i.wrapping_mul(u64::MAX / n))] += 1;
+        }
+        let mut sum = 0.0f64;
+        for (j, &h) in hits.iter().enumerate() {
+            let p = d.pdf(j) as f64;
+            sum += p;
+            assert!((h as f64 / n as f64 - p).abs() <= 2.0 / n as f64 + 1e-7 * p, "{j}: {h} vs {p}");
+            if w[j] == 0.0 {
+                assert_eq!(h, 0);
+            }
+        }
+        assert!((sum - 1.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn random_draws_follow_the_pdf_and_values_track_the_weights() {
+        let w: Vec<f32> = (0..1000).map(|j| 1.0 + (j as f32 * 0.37).sin().abs() * 1e3).collect();
+        let d = Quantised::new(&w).unwrap();
+        let mut rng = Rng::new(4);
+        let mut hits = vec![0u32; w.len()];
+        let n = 2_000_000;
+        for _ in 0..n {
+            hits[d.sample(rng.next_u64())] += 1;
+        }
+        let chi2: f64 = hits
+            .iter()
+            .enumerate()
+            .map(|(j, &h)| {
+                let e = d.pdf(j) as f64 * n as f64;
+                (h as f64 - e).powi(2) / e
+            })
+            .sum();
+        // 999 degrees of freedom: mean 999, sd 45.
+        assert!(chi2 < 999.0 + 5.0 * 45.0, "chi2 {chi2}");
+        for (j, &x) in w.iter().enumerate() {
+            assert!((d.value(j) / x - 1.0).abs() < 0.033, "{j}");
+        }
+        assert!(d.bytes() <= Quantised::bytes_for(1000));
+    }
+
+    #[test]
+    fn all_zero_has_no_distribution_and_a_single_item_always_wins() {
+        assert!(Quantised::new(&[0.0, -1.0, f32::NAN]).is_none());
+        let d = Quantised::new(&[0.0, 0.0, 5.0, 0.0]).unwrap();
+        for r in [0, 1, u64::MAX / 2, u64::MAX] {
+            assert_eq!(d.sample(r), 2);
+        }
+        assert_eq!(d.pdf(2), 1.0);
+    }
+}

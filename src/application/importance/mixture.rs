@@ -1,0 +1,185 @@
+//! STAGE 5 (application, importance caching): how a shading point draws VPLs from its caches
+//! (ALGORITHMS.md §6.3, "bilateral MIS") — the four techniques F (full, with visibility), U (unoccluded),
+//! B (bounded over the cache's region) and C (conservative: uniform over all VPLs), each the uniform mixture
+//! of its distribution over the selected caches whose distribution is not all zero, one draw per technique,
+//! combined by the balance heuristic (default) or Georgiev's α-max heuristic (α = 1).
+//!
+//! A technique none of the selected caches can draw from (every one of its distributions is 0) draws no
+//! sample and has density 0 in the combination (multi-sample MIS with n_t = 0). C is never empty, so every
+//! VPL that contributes has a positive density in the combination and the estimator is unbiased.
+//!
+//! Depends on the record's distributions only.
+
+use super::distribution::Quantised;
+use crate::sampling::Rng;
+
+/// The techniques, in the order the combination and the parameter's letters use.
+pub const LETTERS: [char; 4] = ['f', 'u', 'b', 'c'];
+
+/// The conservative technique's index.
+pub const CONSERVATIVE: usize = 3;
+
+/// How the techniques' samples are combined.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mis {
+    /// Balance heuristic: a sample of VPL j counts I_j / Σ_t p_t(j).
+    Balance,
+    /// α-max with α = 1: a sample counts I_j / p_t(j) when its technique t has the largest p_t(j) (the
+    /// earliest of equals), else 0.
+    AlphaMax,
+}
+
+/// The stored distributions (F, U, B) of the selected caches, as the shading point sees them.
+pub struct Mixture<I> {
+    caches: I,
+    /// Selected caches whose distribution of each stored technique is not all zero.
+    counts: [u32; 3],
+    enabled: [bool; 4],
+    vpls: usize,
+}
+
+impl<'a, I> Mixture<I>
+where
+    I: Iterator<Item = &'a [Option<Quantised>; 3]> + Clone,
+{
+    /// The mixture over `caches` (their F, U, B distributions) of the techniques `enabled`, over `vpls`
+    /// VPLs.
+    pub fn new(caches: I, enabled: [bool; 4], vpls: usize) -> Self {
+        let mut counts = [0u32; 3];
+        for d in caches.clone() {
+            for (t, c) in counts.iter_mut().enumerate() {
+                *c += d[t].is_some() as u32;
+            }
+        }
+        Mixture { caches, counts, enabled, vpls }
+    }
+
+    /// Whether technique `t` draws a sample.
+    #[inline]
+    pub fn active(&self, t: usize) -> bool {
+        self.enabled[t] && self.vpls > 0 && (t == CONSERVATIVE || self.counts[t] > 0)
+    }
+
+    /// p_t(j): the probability that technique `t` draws VPL `j` (0 for an inactive technique).
+    #[inline]
+    pub fn pdf(&self, t: usize, j: usize) -> f32 {
+        if !self.active(t) {
+            return 0.0;
+        }
+        if t == CONSERVATIVE {
+            return 1.0 / self.vpls as f32;
+        }
+        let sum: f32 = self.caches.clone().filter_map(|d| d[t].as_ref()).map(|q| q.pdf(j)).sum();
+        sum / self.counts[t] as f32
+    }
+
+    /// A draw of technique `t`: a cache chosen uniformly among those that can draw, then a VPL from its
+    /// distribution; `None` for an inactive technique.
+    #[inline]
+    pub fn sample(&self, t: usize, rng: &mut Rng) -> Option<usize> {
+        if !self.active(t) {
+            return None;
+        }
+        if t == CONSERVATIVE {
+            return Some(rng.below(self.vpls as u32) as usize);
+        }
+        let k = rng.below(self.counts[t]) as usize;
+        let q = self.caches.clone().filter_map(|d| d[t].as_ref()).nth(k)?;
+        Some(q.sample(rng.next_u64()))
+    }
+
+    /// What a sample of VPL `j` drawn by technique `t` is multiplied by (its contribution I_j times this
+    /// is the sample's share of the estimate): the MIS weight over the density.
+    #[inline]
+    pub fn factor(&self, t: usize, j: usize, mis: Mis) -> f32 {
+        let p = [0, 1, 2, 3].map(|k| self.pdf(k, j));
+        match mis {
+            Mis::Balance => {
+                let sum: f32 = p.iter().sum();
+                if sum > 0.0 { 1.0 / sum } else { 0.0 }
+            }
+            Mis::AlphaMax => {
+                // The winner: the first technique with the largest density.
+                let best = (0..4).fold(0, |b, k| if p[k] > p[b] { k } else { b });
+                if best == t && p[t] > 0.0 { 1.0 / p[t] } else { 0.0 }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn caches() -> Vec<[Option<Quantised>; 3]> {
+        // Three caches over 6 VPLs: VPL 4 has zero F density at every cache (occluded at the caches), VPL 5
+        // is zero in every stored distribution, and one cache's F is all zero.
+        let q = |w: &[f32]| Quantised::new(w);
+        vec![
+            [q(&[1.0, 2.0, 0.0, 4.0, 0.0, 0.0]), q(&[1.0, 2.0, 3.0, 4.0, 5.0, 0.0]), q(&[2.0, 2.0, 3.0, 4.0, 9.0, 0.0])],
+            [None, q(&[0.0, 0.0, 3.0, 1.0, 1.0, 0.0]), q(&[1.0, 1.0, 3.0, 1.0, 1.0, 0.0])],
+            [q(&[0.0, 5.0, 1.0, 0.0, 0.0, 0.0]), None, q(&[1.0; 6])],
+        ]
+    }
+
+    /// The exact expectation of the estimator for contributions `i`: Σ_t Σ_j p_t(j)·factor_t(j)·I_j.
+    fn expectation(m: &Mixture<impl Iterator<Item = &'static [Option<Quantised>; 3]> + Clone>, i: &[f32], mis: Mis) -> f32 {
+        (0..4).filter(|&t| m.active(t)).map(|t| (0..i.len()).map(|j| m.pdf(t, j) * m.factor(t, j, mis) * i[j]).sum::<f32>()).sum()
+    }
+
+    #[test]
+    fn every_combination_with_c_is_unbiased_for_vpls_no_stored_distribution_reaches() {
+        let c: &'static [[Option<Quantised>; 3]] = Box::leak(caches().into_boxed_slice());
+        let i = [0.5, 1.0, 2.0, 0.25, 3.0, 7.0];
+        let exact: f32 = i.iter().sum();
+        for bits in 0..16u32 {
+            let enabled = [0, 1, 2, 3].map(|k| bits >> k & 1 == 1);
+            if !enabled[CONSERVATIVE] {
+                continue;
+            }
+            for mis in [Mis::Balance, Mis::AlphaMax] {
+                let m = Mixture::new(c.iter(), enabled, i.len());
+                let e = expectation(&m, &i, mis);
+                assert!((e - exact).abs() < 1e-4 * exact, "{enabled:?} {mis:?}: {e} vs {exact}");
+            }
+        }
+    }
+
+    #[test]
+    fn without_c_a_vpl_no_distribution_reaches_is_lost() {
+        let c: &'static [[Option<Quantised>; 3]] = Box::leak(caches().into_boxed_slice());
+        let m = Mixture::new(c.iter(), [true, false, false, false], 6);
+        let i = [0.0, 0.0, 0.0, 0.0, 3.0, 0.0];
+        assert_eq!(expectation(&m, &i, Mis::Balance), 0.0, "F alone never draws VPL 4");
+        let pdf_sum: f32 = (0..6).map(|j| m.pdf(0, j)).sum();
+        assert!((pdf_sum - 1.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn draws_follow_the_mixture_density() {
+        let c: &'static [[Option<Quantised>; 3]] = Box::leak(caches().into_boxed_slice());
+        let m = Mixture::new(c.iter(), [true; 4], 6);
+        let mut rng = Rng::new(11);
+        for t in 0..4 {
+            let n = 200_000;
+            let mut hits = [0u32; 6];
+            for _ in 0..n {
+                hits[m.sample(t, &mut rng).unwrap()] += 1;
+            }
+            for j in 0..6 {
+                let p = m.pdf(t, j) as f64;
+                let sd = (p * (1.0 - p) / n as f64).sqrt();
+                assert!((hits[j] as f64 / n as f64 - p).abs() <= 5.0 * sd + 1e-9, "t {t} j {j}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_technique_no_cache_can_draw_from_is_inactive() {
+        let only: &'static [[Option<Quantised>; 3]] = Box::leak(vec![[None, None, Quantised::new(&[1.0, 1.0])]].into_boxed_slice());
+        let m = Mixture::new(only.iter(), [true; 4], 2);
+        assert!(!m.active(0) && !m.active(1) && m.active(2) && m.active(3));
+        assert_eq!(m.sample(0, &mut Rng::new(1)), None);
+        assert_eq!(m.pdf(1, 0), 0.0);
+    }
+}

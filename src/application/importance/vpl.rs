@@ -1,0 +1,390 @@
+//! STAGE 5 (application, importance caching): the virtual point lights (ALGORITHMS.md §6.3) — made by
+//! tracing light paths (instant radiosity) and evaluated at a receiver.
+//!
+//! Every light path starts at a light chosen by power (pbrt-v3's `Sample_Le`, [`Lights::sample_le`]); its
+//! first vertex is an *emission VPL* (the direct light), every later surface vertex with a non-specular
+//! lobe a *surface VPL* (the indirect light). Paths continue by BSDF sampling up to `max_depth` surface
+//! vertices with Russian roulette after the second, and paths are traced until the requested number of
+//! VPLs exists (the last path is cut there); every power is divided by the number of paths started. The
+//! contribution of VPL j to a receiver x with BSDF f_x seen from ω_o is
+//!
+//! I_j(x) = E_j(−ω) · f_x(ω_o, ω) · |cos θ_x| / max(d², d_c²) · V(x, y_j),
+//!
+//! where ω is the unit direction from x to the VPL and E_j what the VPL sends toward x: for a surface VPL
+//! β·f_j(−ω, ω_in)·|cos θ_j|, for a point on an area light Le·|cos θ_j|, for a point light its intensity;
+//! a distant or infinite light's emission VPL is a direction (no distance, no clamp). The clamp d_c is the
+//! same for the estimator and the reference.
+//!
+//! VPLs on Lambertian surfaces (the most common) store their diffuse radiance factor β·R/π and emit like
+//! a cosine emitter; other surface VPLs keep their BSDF in a side table, so the list the per-sample
+//! reference walks stays small. Light tracing uses the radiance BSDFs (the adjoint correction for shading
+//! normals and refraction is left out; estimator and reference share the same VPLs either way).
+//!
+//! Depends on `scene`, `shading` and `render::lighting` (the prepared shading data); never on placement.
+
+use glam::Vec3A;
+
+use crate::render::lighting::Shading;
+use crate::sampling::Rng;
+use crate::scene::Scene;
+use crate::scene::geometry::SurfaceInteraction;
+use crate::scene::ray::{Ray, RayCounters};
+use crate::shading::bsdf::Bsdf;
+use crate::shading::bxdf::{Bxdf, BxdfFlags};
+use crate::shading::light::{EmitterPoint, LightSelect, SurfacePoint, spawn_ray_to};
+use crate::shading::{Spectrum, luminance};
+
+/// Most surfaces without a material a light path passes through before it is dropped.
+const MAX_PASS_THROUGH: usize = 1024;
+
+/// How a VPL sends light toward a receiver.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Emitter {
+    /// Power·|n·w| toward the side of `ng` (both sides when `two_sided`): a point on a diffuse area light,
+    /// or a surface VPL on a Lambertian surface.
+    Cosine {
+        /// Whether both sides emit.
+        two_sided: bool,
+    },
+    /// Power in every direction (a point light).
+    Isotropic,
+    /// Power × what light `light` emits from the VPL toward w (a spot light).
+    Light {
+        /// The light's index.
+        light: u32,
+    },
+    /// Power arriving from direction `n` (a distant or infinite light); no distance.
+    Directional,
+    /// Power × f_j(w, ω_in)·|n·w| with the BSDF and ω_in of entry `index` of [`Vpls::bsdfs`].
+    Bsdf {
+        /// Index into the side table.
+        index: u32,
+    },
+}
+
+/// One virtual point light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Vpl {
+    /// Position (unused for directional VPLs).
+    pub p: Vec3A,
+    /// Absolute error bound of `p` (for the shadow ray's offset).
+    pub p_error: Vec3A,
+    /// Emitting-side geometric normal (zero for point lights); for a directional VPL the unit direction
+    /// toward the light.
+    pub ng: Vec3A,
+    /// Shading normal on the same side (the cosine's axis).
+    pub ns: Vec3A,
+    /// Power factor (already divided by the number of light paths and the light's selection probability).
+    pub power: Spectrum,
+    /// How it emits.
+    pub emitter: Emitter,
+}
+
+/// A surface VPL whose BSDF is not Lambertian: the BSDF and the direction the light came from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GeneralVpl {
+    /// The BSDF at the VPL.
+    pub bsdf: Bsdf,
+    /// Unit direction toward the previous vertex of the light path.
+    pub wi: Vec3A,
+}
+
+/// The VPL set of a render.
+#[derive(Clone, Debug)]
+pub struct Vpls {
+    /// The VPLs.
+    pub list: Vec<Vpl>,
+    /// BSDFs of the non-Lambertian surface VPLs.
+    pub bsdfs: Vec<GeneralVpl>,
+    /// Light paths started.
+    pub paths: u64,
+    /// d_c² (the distance clamp, squared).
+    pub clamp2: f32,
+    /// Each VPL's flux luminance (for power sampling).
+    pub flux: Vec<f32>,
+}
+
+/// A receiver: a surface point with its BSDF and the direction it is seen from.
+#[derive(Clone, Copy, Debug)]
+pub struct Receiver {
+    /// The surface point.
+    pub si: SurfaceInteraction,
+    /// Its BSDF.
+    pub bsdf: Bsdf,
+    /// Unit direction toward the viewer.
+    pub wo: Vec3A,
+}
+
+/// What a VPL sends to a receiver before visibility: the RGB contribution and the shadow ray that decides
+/// visibility.
+#[derive(Clone, Copy, Debug)]
+pub struct Unoccluded {
+    /// I_j(x) with V = 1.
+    pub value: Spectrum,
+    /// From the receiver to the VPL (or along the VPL's direction, unbounded).
+    pub shadow: Ray,
+}
+
+impl Vpls {
+    /// No VPLs (a scene without lights), with the distance clamp `clamp`.
+    pub fn none(clamp: f32) -> Vpls {
+        Vpls { list: Vec::new(), bsdfs: Vec::new(), paths: 0, clamp2: clamp * clamp, flux: Vec::new() }
+    }
+
+    /// Traces light paths in `scene` until `count` VPLs exist (or `64·count` paths brought none), with
+    /// light paths of at most `max_depth` surface vertices, lights chosen by `select`, all randomness from
+    /// `rng`, and the distance clamp `clamp`.
+    pub fn generate(
+        scene: &Scene,
+        sh: &Shading<'_>,
+        select: &LightSelect,
+        count: usize,
+        max_depth: u32,
+        clamp: f32,
+        rng: &mut Rng,
+    ) -> Vpls {
+        let mut v = Vpls { list: Vec::with_capacity(count), bsdfs: Vec::new(), paths: 0, clamp2: clamp * clamp, flux: Vec::new() };
+        let mut rho_u = [[0.0f32; 2]; 16];
+        for (i, u) in rho_u.iter_mut().enumerate() {
+            *u = [((i % 4) as f32 + 0.5) / 4.0, ((i / 4) as f32 + 0.5) / 4.0];
+        }
+        let give_up = 64 * count as u64 + 64;
+        while v.list.len() < count && v.paths < give_up {
+            v.paths += 1;
+            let Some((light, pmf)) = select.sample(rng.uniform()) else { break };
+            let (u_pos, u_dir) = (rng.uniform2(), rng.uniform2());
+            let Some(start) = sh.lights.sample_le(light, u_pos, u_dir) else { continue };
+            v.push_emission(sh, light, &start.at, start.inv_pdf_at / pmf);
+            let mut beta = start.beta / pmf;
+            let beta0 = beta.max_element();
+            let mut ray = start.ray;
+            let (mut depth, mut passes) = (0u32, 0usize);
+            while v.list.len() < count && depth < max_depth {
+                let Some(si) = scene.geometry.intersect(&ray) else { break };
+                let Some(bsdf) = sh.bsdf(&si) else {
+                    passes += 1;
+                    if passes > MAX_PASS_THROUGH {
+                        break;
+                    }
+                    ray = si.spawn_ray(ray.d);
+                    continue;
+                };
+                depth += 1;
+                let wi = -ray.d.normalize();
+                if bsdf.num_components(BxdfFlags::NON_SPECULAR) > 0 {
+                    v.push_surface(&si, &bsdf, wi, beta, &rho_u);
+                }
+                let Some(bs) = bsdf.sample_f(wi, rng.uniform2(), BxdfFlags::ALL) else { break };
+                if bs.f == Spectrum::ZERO || bs.pdf <= 0.0 {
+                    break;
+                }
+                beta *= bs.f * (bs.wi.dot(bsdf.shading_normal()).abs() / bs.pdf);
+                if depth >= 2 {
+                    let rr = beta.max_element() / beta0;
+                    if rr < 1.0 {
+                        let q = (1.0 - rr).max(0.05);
+                        if rng.uniform() < q {
+                            break;
+                        }
+                        beta /= 1.0 - q;
+                    }
+                }
+                if !beta.is_finite() {
+                    break;
+                }
+                ray = si.spawn_ray(bs.wi);
+            }
+        }
+        let inv = 1.0 / v.paths.max(1) as f32;
+        for (vpl, flux) in v.list.iter_mut().zip(v.flux.iter_mut()) {
+            vpl.power *= inv;
+            *flux *= inv;
+        }
+        v
+    }
+
+    fn push(&mut self, vpl: Vpl, flux: f32) {
+        let ok = vpl.power.is_finite() && vpl.p.is_finite() && flux.is_finite();
+        if ok {
+            self.list.push(vpl);
+            self.flux.push(flux.max(0.0));
+        }
+    }
+
+    /// The emission vertex of a light path from light `light`, weighted by `weight` (1 / its density and
+    /// the light's selection probability).
+    fn push_emission(&mut self, sh: &Shading<'_>, light: usize, at: &EmitterPoint, weight: f32) {
+        use std::f32::consts::PI;
+        let lights = &sh.lights;
+        let vpl = match *at {
+            EmitterPoint::Surface(sp) => {
+                // A diffuse area light emits the same radiance toward every lit direction.
+                let two_sided = lights.emission(light, at, -sp.n) != Spectrum::ZERO;
+                let le = lights.emission(light, at, sp.n);
+                let power = le * weight;
+                let sides = if two_sided { 2.0 } else { 1.0 };
+                let v = Vpl { p: sp.p, p_error: sp.p_error, ng: sp.n, ns: sp.n, power, emitter: Emitter::Cosine { two_sided } };
+                return self.push(v, luminance(power) * PI * sides);
+            }
+            EmitterPoint::Point(p) => {
+                let base = Vpl { p, p_error: Vec3A::ZERO, ng: Vec3A::ZERO, ns: Vec3A::ZERO, power: Spectrum::ZERO, emitter: Emitter::Isotropic };
+                if lights.is_delta_point(light) {
+                    let i = lights.emission(light, at, Vec3A::Z);
+                    Vpl { power: i * weight, ..base }
+                } else {
+                    Vpl { power: Spectrum::splat(weight), emitter: Emitter::Light { light: light as u32 }, ..base }
+                }
+            }
+            EmitterPoint::Direction(w) => Vpl {
+                p: Vec3A::ZERO,
+                p_error: Vec3A::ZERO,
+                ng: w,
+                ns: w,
+                power: lights.emission(light, at, w) * weight,
+                emitter: Emitter::Directional,
+            },
+        };
+        let flux = match vpl.emitter {
+            Emitter::Isotropic => 4.0 * PI * luminance(vpl.power),
+            Emitter::Light { .. } => luminance(lights.power(light)) * weight,
+            _ => luminance(vpl.power) * PI * lights.world_radius() * lights.world_radius(),
+        };
+        self.push(vpl, flux);
+    }
+
+    /// A surface VPL at `si` with BSDF `bsdf`, light arriving from `wi` with throughput `beta`.
+    fn push_surface(&mut self, si: &SurfaceInteraction, bsdf: &Bsdf, wi: Vec3A, beta: Spectrum, rho_u: &[[f32; 2]]) {
+        // The emitting side is the side the light arrived on.
+        let side = if wi.dot(si.ng) >= 0.0 { 1.0 } else { -1.0 };
+        let (ng, ns) = (si.ng * side, si.ns * side);
+        let lambert = bsdf.lobes().all(|(b, _)| matches!(b, Bxdf::Lambertian(_)) || b.flags().contains(BxdfFlags::SPECULAR));
+        let rho = bsdf.rho_hd(wi, rho_u);
+        let flux = luminance(beta * rho);
+        if lambert {
+            let r: Spectrum =
+                bsdf.lobes().filter_map(|(b, s)| if let Bxdf::Lambertian(l) = b { Some(s * l.r) } else { None }).sum();
+            let power = beta * r * std::f32::consts::FRAC_1_PI;
+            let v = Vpl { p: si.p, p_error: si.p_error, ng, ns, power, emitter: Emitter::Cosine { two_sided: false } };
+            self.push(v, flux);
+        } else {
+            let index = self.bsdfs.len() as u32;
+            self.bsdfs.push(GeneralVpl { bsdf: *bsdf, wi });
+            let v = Vpl { p: si.p, p_error: si.p_error, ng, ns, power: beta, emitter: Emitter::Bsdf { index } };
+            self.push(v, flux);
+        }
+    }
+
+    /// Number of VPLs.
+    pub fn len(&self) -> usize {
+        self.list.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.list.is_empty()
+    }
+
+    /// What VPL `j` sends toward unit direction `w` (leaving it), with light `sh`: see [`Emitter`].
+    #[inline]
+    fn emitted(&self, sh: &Shading<'_>, vpl: &Vpl, w: Vec3A) -> Spectrum {
+        match vpl.emitter {
+            Emitter::Cosine { two_sided } => {
+                let c = vpl.ng.dot(w);
+                if two_sided || c > 0.0 { vpl.power * vpl.ns.dot(w).abs() } else { Spectrum::ZERO }
+            }
+            Emitter::Isotropic | Emitter::Directional => vpl.power,
+            Emitter::Light { light } => vpl.power * sh.lights.emission(light as usize, &EmitterPoint::Point(vpl.p), w),
+            Emitter::Bsdf { index } => {
+                let g = &self.bsdfs[index as usize];
+                vpl.power * g.bsdf.f(w, g.wi, BxdfFlags::ALL) * vpl.ns.dot(w).abs()
+            }
+        }
+    }
+
+    /// I_j(x) of VPL `j` at receiver `x` without visibility, and its shadow ray; `None` when it is 0.
+    #[inline]
+    pub fn unoccluded(&self, sh: &Shading<'_>, j: usize, x: &Receiver) -> Option<Unoccluded> {
+        let vpl = &self.list[j];
+        if let Emitter::Directional = vpl.emitter {
+            let w = vpl.ng;
+            let value = vpl.power * x.bsdf.f(x.wo, w, BxdfFlags::ALL) * w.dot(x.bsdf.shading_normal()).abs();
+            return (value.max_element() > 0.0).then(|| Unoccluded { value, shadow: x.si.spawn_ray(w) });
+        }
+        let d = vpl.p - x.si.p;
+        let d2 = d.length_squared();
+        if !(d2 > 0.0) {
+            return None;
+        }
+        let w = d / d2.sqrt();
+        let f = x.bsdf.f(x.wo, w, BxdfFlags::ALL);
+        if f.max_element() <= 0.0 {
+            return None;
+        }
+        let e = self.emitted(sh, vpl, -w);
+        let value = e * f * (w.dot(x.bsdf.shading_normal()).abs() / d2.max(self.clamp2));
+        if !(value.max_element() > 0.0) {
+            return None;
+        }
+        let to = SurfacePoint { p: vpl.p, p_error: vpl.p_error, n: vpl.ng };
+        Some(Unoccluded { value, shadow: spawn_ray_to(&x.si, &to) })
+    }
+
+    /// I_j(x) with visibility (one shadow ray when the unoccluded value is not 0).
+    #[inline]
+    pub fn contribution(&self, scene: &Scene, sh: &Shading<'_>, j: usize, x: &Receiver, rays: &mut RayCounters) -> Spectrum {
+        match self.unoccluded(sh, j, x) {
+            Some(u) => {
+                rays.shadow += 1;
+                if scene.geometry.occluded(&u.shadow) { Spectrum::ZERO } else { u.value }
+            }
+            None => Spectrum::ZERO,
+        }
+    }
+
+    /// Luminance of an upper bound of VPL `j`'s unoccluded contribution anywhere within distance `radius`
+    /// of the receiver `x` (the B distribution, ALGORITHMS.md §6.3 after [BZ] `evalBoundedGeometricFactor`):
+    /// the distance shortened by `radius` (then clamped by d_c), the VPL's cosine widened by the angle the
+    /// region subtends, the receiver's cosine bounded by 1, the BSDFs at the actual direction.
+    pub fn bound(&self, sh: &Shading<'_>, j: usize, x: &Receiver, radius: f32) -> f32 {
+        let vpl = &self.list[j];
+        if let Emitter::Directional = vpl.emitter {
+            return luminance(vpl.power * x.bsdf.f(x.wo, vpl.ng, BxdfFlags::ALL));
+        }
+        let d = vpl.p - x.si.p;
+        let dist = d.length();
+        if !(dist > 0.0) {
+            return 0.0;
+        }
+        let w = d / dist;
+        let f = x.bsdf.f(x.wo, w, BxdfFlags::ALL);
+        if f.max_element() <= 0.0 {
+            return 0.0;
+        }
+        let near = (dist - radius).max(0.0);
+        let spread = (radius / dist).min(1.0).asin();
+        let widened = |cos: f32| (cos.clamp(-1.0, 1.0).acos() - spread).max(0.0).cos().max(0.0);
+        let e = match vpl.emitter {
+            Emitter::Cosine { two_sided } => {
+                let c = vpl.ns.dot(-w);
+                vpl.power * widened(if two_sided { c.abs() } else { c })
+            }
+            Emitter::Bsdf { index } => {
+                let g = &self.bsdfs[index as usize];
+                vpl.power * g.bsdf.f(-w, g.wi, BxdfFlags::ALL) * widened(vpl.ns.dot(-w).abs())
+            }
+            _ => self.emitted(sh, vpl, -w),
+        };
+        let b = luminance(e * f) / (near * near).max(self.clamp2);
+        if b.is_finite() { b.max(0.0) } else { 0.0 }
+    }
+
+    /// Bytes the VPL set occupies.
+    pub fn bytes(&self) -> usize {
+        self.list.len() * (std::mem::size_of::<Vpl>() + 4) + self.bsdfs.len() * std::mem::size_of::<GeneralVpl>()
+    }
+
+    /// Bytes a set of `count` VPLs may occupy (every one with its own BSDF).
+    pub fn bytes_for(count: usize) -> usize {
+        count * (std::mem::size_of::<Vpl>() + 4 + std::mem::size_of::<GeneralVpl>())
+    }
+}
