@@ -624,3 +624,54 @@ fn area_lights_on_a_matte_scene_match_pbrt_v3_within_noise() {
     assert!(ours.first_non_finite().is_none());
     common::assert_matches_pbrt_pair("area", &ours, &dir.join("area-a.pfm"), &dir.join("area-b.pfm"));
 }
+
+#[test]
+fn light_paths_carry_each_lights_emitted_flux() {
+    // pbrt-v3's Sample_Le: the throughput of a light path's first ray, averaged over its samples, is the
+    // light's emitted flux. Exact values (not pbrt-v3's `Power()`, which approximates the spot's and the
+    // environment's): a one-sided quad πAL, two-sided 2πAL, a sphere π·4πr²·L, a point light 4πI, a spot
+    // with a hard edge 2π(1 − cos θ)·I, a distant light L·πR² and a constant environment 4πL·πR² through
+    // the world's bounding disk (R: its radius; the floor makes it √200 here).
+    let quad = "Shape \"trianglemesh\" \"point P\" [-1 -1 3  1 -1 3  1 1 3  -1 1 3] \"integer indices\" [0 2 1 0 3 2]\n";
+    let world_r = (20.0f32 * 20.0 + 20.0 * 20.0).sqrt() / 2.0;
+    let cases: Vec<(&str, String, f32)> = vec![
+        ("one-sided quad", format!("AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [2 2 2]\n{quad}AttributeEnd\n"), PI * 4.0 * 2.0),
+        (
+            "two-sided quad",
+            format!("AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [2 2 2] \"bool twosided\" true\n{quad}AttributeEnd\n"),
+            2.0 * PI * 4.0 * 2.0,
+        ),
+        (
+            "sphere",
+            "AttributeBegin\nTranslate 0 0 3\nAreaLightSource \"diffuse\" \"rgb L\" [2 2 2]\nShape \"sphere\" \"float radius\" 0.5\nAttributeEnd\n".into(),
+            PI * 4.0 * PI * 0.25 * 2.0,
+        ),
+        ("point", "LightSource \"point\" \"point from\" [0 0 3] \"rgb I\" [3 3 3]\n".into(), 4.0 * PI * 3.0),
+        (
+            "spot",
+            "LightSource \"spot\" \"point from\" [0 0 3] \"point to\" [0 0 0] \"float coneangle\" 40 \"float conedeltaangle\" 0 \"rgb I\" [3 3 3]\n".into(),
+            2.0 * PI * (1.0 - 40f32.to_radians().cos()) * 3.0,
+        ),
+        ("distant", "LightSource \"distant\" \"point from\" [1 1 3] \"point to\" [0 0 0] \"rgb L\" [2 2 2]\n".into(), 2.0 * PI * world_r * world_r),
+        ("infinite", "LightSource \"infinite\" \"rgb L\" [0.5 0.5 0.5]\n".into(), 4.0 * PI * 0.5 * PI * world_r * world_r),
+    ];
+    for (name, light, flux) in cases {
+        let text = format!("LookAt 0 0 10 0 0 0 0 1 0\nCamera \"perspective\"\nWorldBegin\n{light}Material \"matte\"\n{FLOOR}WorldEnd\n");
+        let loaded = load(&text);
+        let lights = build_lights(&loaded.scene);
+        assert_eq!(lights.len(), if name.ends_with("quad") { 2 } else { 1 }, "{name}");
+        let mut rng = Rng::new(21);
+        let n = 200_000;
+        let mut sum = 0.0f64;
+        for i in 0..n {
+            let light = i % lights.len();
+            if let Some(s) = lights.sample_le(light, rng.uniform2(), rng.uniform2()) {
+                assert!(s.beta.is_finite() && s.ray.d.is_finite(), "{name}");
+                sum += s.beta.to_array()[0] as f64 * lights.len() as f64;
+            }
+        }
+        let mean = sum / n as f64;
+        eprintln!("{name}: mean throughput {mean:.4}, flux {flux:.4}");
+        assert!((mean / flux as f64 - 1.0).abs() < 0.01, "{name}: {mean} vs {flux}");
+    }
+}
