@@ -21,6 +21,7 @@ use crate::render::cache_driver::{CacheOverrides, CachedOutput, Placement};
 use crate::render::{RenderSettings, render};
 use crate::scene::{LoadOptions, LoadedScene, load};
 
+pub mod chart;
 mod per_pixel;
 
 /// One sweep.
@@ -72,8 +73,14 @@ pub struct Row {
 }
 
 /// The part of stored reference file names that depends on the sweep's `--set` parameters (empty without
-/// any), so a reference made with other parameters (say another `maxdistance`) is never reused.
+/// any), so a reference made with other parameters (say another `maxdistance`) is never reused. The cache
+/// driver's placement parameters (σ_a, `sdminsize`, `ratio`, …) do not change the reference and are left out,
+/// so sweeps over them share one; `subpixels` and `seed` do and stay in.
 fn variant(set: &[(String, String)]) -> String {
+    let placement_only = |k: &str| {
+        k != "subpixels" && k != "seed" && crate::render::cache_driver::PARAMETERS.iter().any(|p| p.name == k)
+    };
+    let set: Vec<&(String, String)> = set.iter().filter(|(k, _)| !placement_only(k)).collect();
     if set.is_empty() {
         return String::new();
     }
@@ -196,6 +203,11 @@ pub fn run(sweep: &Sweep, log: &mut dyn FnMut(&str)) -> Result<(Vec<Row>, String
         }
     }
     write_results(&rows, &sweep.out)?;
+    let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
+    scenes.dedup();
+    for scene in scenes {
+        chart::write(&rows, scene, &sweep.out.join(format!("{scene}-error-vs-time.svg")))?;
+    }
     Ok((rows.clone(), table(&rows, sweep)))
 }
 

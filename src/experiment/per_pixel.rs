@@ -9,7 +9,6 @@
 //! Depends on `scene`, `render`, `application` (the registry), `image` and `metrics`; only `experiment`
 //! uses it.
 
-use std::time::Instant;
 
 use crate::application::registry::{self, WithApplication};
 use crate::application::{Application, Baseline};
@@ -126,11 +125,13 @@ fn per_pixel(l: &mut LoadedScene, sweep: &Sweep, base: &Baseline, spp: u32, n: u
     };
     // A box over the pixel, as the cache driver reconstructs its sub-pixel samples.
     let saved = std::mem::replace(&mut l.scene.filter, Filter { radius: [0.5, 0.5], kind: FilterKind::Box });
-    let t = Instant::now();
     let result = render(&l.scene, None, &settings, &mut Warnings::default());
-    let secs = t.elapsed().as_secs_f64();
     l.scene.filter = saved;
-    let mut img = result?.image;
+    let out = result?;
+    // The integrator's own render time, as cache runs report theirs (scene loading and light set-up left
+    // out of both).
+    let secs = out.render_secs;
+    let mut img = out.image;
     img.pixels.iter_mut().for_each(|p| p.iter_mut().for_each(|c| *c *= base.scale));
     Ok((img, secs))
 }

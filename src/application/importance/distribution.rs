@@ -86,6 +86,12 @@ impl Quantised {
         Some(Quantised { codes, cum: cum.into_boxed_slice(), scale: max / MAX_WEIGHT as f32 })
     }
 
+    /// The smallest weight that keeps a non-zero code in a distribution whose largest weight is `max`
+    /// (smaller ones quantise to 0).
+    pub fn smallest_kept(max: f32) -> f32 {
+        max * (8.0 / MAX_WEIGHT as f32)
+    }
+
     /// Number of items.
     pub fn len(&self) -> usize {
         self.codes.len()
@@ -166,6 +172,9 @@ mod tests {
             x *= 1.013;
         }
         assert_eq!(code_of(7.9), 0);
+        let max = 3.5f32;
+        let kept = Quantised::new(&[max, Quantised::smallest_kept(max), Quantised::smallest_kept(max) * 0.99]).unwrap();
+        assert!(kept.pdf(1) > 0.0 && kept.pdf(2) == 0.0);
         assert_eq!(code_of(f32::NAN), 0);
     }
 

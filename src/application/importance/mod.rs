@@ -28,11 +28,12 @@ use crate::render::lighting::Shading;
 use crate::render::params::{IntegratorParams, Parameter};
 use crate::sampling::Rng;
 use crate::scene::Scene;
+use crate::scene::accel::OccluderHint;
 use crate::scene::ray::RayCounters;
 use crate::shading::light::LightSelect;
 use crate::shading::{Spectrum, luminance};
 
-use super::{Application, Neighbour};
+use super::{Application, Baseline, Neighbour};
 use distribution::Quantised;
 use mixture::{LETTERS, Mis, Mixture};
 use vpl::{Receiver, Vpls};
@@ -81,6 +82,8 @@ pub struct ImportanceCache {
     pub mis: Mis,
     /// Caches, or a baseline without them.
     pub sampling: Sampling,
+    /// VPLs a baseline draws per sample (0: one per enabled technique).
+    pub draws: u32,
 }
 
 /// One importance cache: where it is (B is built from it once its region is known) and its F, U and B
@@ -135,14 +138,15 @@ impl Lit<'_> {
 }
 
 impl ImportanceCache {
-    fn technique_count(&self) -> u32 {
-        self.enabled.iter().filter(|&&e| e).count() as u32
+    /// VPLs a baseline draws per sample: `draws`, or one per enabled technique.
+    fn baseline_draws(&self) -> u32 {
+        if self.draws > 0 { self.draws } else { self.enabled.iter().filter(|&&e| e).count() as u32 }
     }
 
     /// The per-sample baselines: `technique_count` VPLs drawn uniformly or by flux, averaged.
     fn baseline(&self, cx: &Lit<'_>, x: &Receiver, rng: &mut Rng, rays: &mut RayCounters) -> Spectrum {
         let n = cx.vpls.len();
-        let k = self.technique_count().max(1);
+        let k = self.baseline_draws().max(1);
         let mut l = Spectrum::ZERO;
         for _ in 0..k {
             let (j, p) = match self.sampling {
@@ -182,6 +186,7 @@ impl Application for ImportanceCache {
             "cache",
             "cache: importance caching; uniform or power: many-light baselines without caches",
         ),
+        Parameter::new("draws", "integer", "0", "VPLs the uniform and power baselines draw per sample (0: one per technique)"),
     ];
     const DGS_GEOMETRY: bool = false;
 
@@ -240,7 +245,12 @@ impl Application for ImportanceCache {
                 return Err(bad("sampling", format!("must be \"cache\", \"uniform\" or \"power\", got \"{other}\"")));
             }
         };
+        let draws = p.int_or("draws", 0)?;
+        if !(0..=1 << 20).contains(&draws) {
+            return Err(bad("draws", format!("must be between 0 and {}, got {draws}", 1 << 20)));
+        }
         Ok(ImportanceCache {
+            draws: draws as u32,
             vpls: vpls as usize,
             max_depth: max_depth as u32,
             vpl_seed: p.int_or("vplseed", 0)? as u64,
@@ -292,7 +302,29 @@ impl Application for ImportanceCache {
             ("distributions", letters.into()),
             ("mis", if self.mis == Mis::Balance { "balance" } else { "alphamax" }.into()),
             ("sampling", self.sampling.name().into()),
+            ("draws", self.baseline_draws().into()),
         ]
+    }
+
+    /// Power sampling with the same VPLs and sub-pixel samples; its sample count is `draws` (VPLs per
+    /// sample), so its pixels integrate the same footprint as the reference's.
+    fn baseline(&self) -> Option<Baseline> {
+        let letters: String = (0..4).filter(|&t| self.enabled[t]).map(|t| LETTERS[t]).collect();
+        let set = [
+            ("sampling", "power".to_string()),
+            ("vpls", self.vpls.to_string()),
+            ("vpldepth", self.max_depth.to_string()),
+            ("vplseed", self.vpl_seed.to_string()),
+            ("clamp", self.clamp.to_string()),
+            ("distributions", letters),
+        ];
+        Some(Baseline {
+            label: "power",
+            integrator: Self::NAME,
+            set: set.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
+            samples: "draws",
+            scale: 1.0,
+        })
     }
 
     fn without_caches(&self) -> Option<String> {
@@ -311,14 +343,24 @@ impl Application for ImportanceCache {
     ) -> ImportanceRecord {
         let Some(x) = cx.receiver(at) else { return ImportanceRecord { at: *at, dists: [None, None, None] } };
         let n = cx.vpls.len();
-        let (mut full, mut unoccluded) = (vec![0.0f32; n], vec![0.0f32; n]);
-        for j in 0..n {
-            if let Some(u) = cx.vpls.unoccluded(&cx.shading, j, &x) {
-                let y = luminance(u.value);
-                unoccluded[j] = y;
+        let mut unoccluded = vec![0.0f32; n];
+        let mut shadows = Vec::with_capacity(n);
+        for (j, u) in unoccluded.iter_mut().enumerate() {
+            if let Some(c) = cx.vpls.unoccluded(&cx.shading, j, &x) {
+                *u = luminance(c.value);
+                shadows.push((j, c.shadow));
+            }
+        }
+        // A VPL whose unoccluded contribution quantises to 0 gets no shadow ray: F is 0 for it too (C still
+        // draws it), and the shadow rays go to the VPLs that matter.
+        let floor = Quantised::smallest_kept(unoccluded.iter().copied().fold(0.0, f32::max));
+        let mut full = vec![0.0f32; n];
+        let mut hint = OccluderHint::default();
+        for (j, ray) in shadows {
+            if unoccluded[j] >= floor {
                 rays.shadow += 1;
-                if !cx.scene.geometry.occluded(&u.shadow) {
-                    full[j] = y;
+                if !cx.scene.geometry.occluded_hinted(&ray, None, &mut hint) {
+                    full[j] = unoccluded[j];
                 }
             }
         }
@@ -405,6 +447,7 @@ mod tests {
             enabled: [true; 4],
             mis: Mis::Balance,
             sampling: Sampling::Cache,
+            draws: 0,
         };
         let total = 25_000 * app.record_bytes_bound();
         assert!(total <= 1_000_000_000, "{total}");

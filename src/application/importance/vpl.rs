@@ -361,8 +361,14 @@ impl Vpls {
             return 0.0;
         }
         let near = (dist - radius).max(0.0);
-        let spread = (radius / dist).min(1.0).asin();
-        let widened = |cos: f32| (cos.clamp(-1.0, 1.0).acos() - spread).max(0.0).cos().max(0.0);
+        // cos(max(0, θ − δ)) with θ the VPL-side angle (cos θ = `cos`) and δ = asin(min(1, R/d)) the angle the
+        // region subtends, without trigonometric calls: cos(θ − δ) = cos θ cos δ + sin θ sin δ when θ > δ.
+        let sin_d = (radius / dist).min(1.0);
+        let cos_d = (1.0 - sin_d * sin_d).max(0.0).sqrt();
+        let widened = |cos: f32| {
+            let cos = cos.clamp(-1.0, 1.0);
+            if cos >= cos_d { 1.0 } else { (cos * cos_d + (1.0 - cos * cos).max(0.0).sqrt() * sin_d).max(0.0) }
+        };
         let e = match vpl.emitter {
             Emitter::Cosine { two_sided } => {
                 let c = vpl.ns.dot(-w);
@@ -386,5 +392,58 @@ impl Vpls {
     /// Bytes a set of `count` VPLs may occupy (every one with its own BSDF).
     pub fn bytes_for(count: usize) -> usize {
         count * (std::mem::size_of::<Vpl>() + 4 + std::mem::size_of::<GeneralVpl>())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::*;
+    use crate::error::Warnings;
+    use crate::scene::{LoadOptions, load_str};
+
+    /// A floor, a wall facing it and a lamp: VPLs on all three.
+    const ROOM: &str = "LookAt 0 3 -4 0 0 0 0 1 0\nCamera \"perspective\"\nWorldBegin\n\
+        Material \"matte\" \"rgb Kd\" [0.7 0.6 0.5]\n\
+        Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-2 0 -2  2 0 -2  2 0 2  -2 0 2]\n\
+        Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-2 0 2  2 0 2  2 3 2  -2 3 2]\n\
+        AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [5 5 5]\n\
+        Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-0.5 2.5 -0.5  0.5 2.5 -0.5  0.5 2.5 0.5  -0.5 2.5 0.5]\n\
+        AttributeEnd\nLightSource \"point\" \"point from\" [1 1 -1] \"rgb I\" [2 2 2]\nWorldEnd\n";
+
+    #[test]
+    fn the_bound_holds_over_the_region_and_generation_is_deterministic() {
+        let loaded = load_str(ROOM, Path::new("room.pbrt"), LoadOptions::default()).unwrap();
+        let scene = &loaded.scene;
+        let sh = Shading::build(scene, true, &mut Warnings::default()).unwrap();
+        let select = LightSelect::new(&sh.lights, "power").unwrap();
+        let make = |seed| Vpls::generate(scene, &sh, &select, 500, 5, 0.05, &mut Rng::new(seed));
+        let v = make(3);
+        assert_eq!(v.len(), 500);
+        assert_eq!(v.list, make(3).list, "same seed, same VPLs");
+        assert_ne!(v.list, make(4).list);
+        assert!(v.list.iter().any(|p| matches!(p.emitter, Emitter::Isotropic)));
+        assert!(v.list.iter().any(|p| matches!(p.emitter, Emitter::Cosine { .. }) && p.p.y < 2.4));
+        // Receivers on the floor: a centre x and points within `radius` of it. For Lambertian receivers and
+        // cosine or isotropic VPLs the bound at x is an upper bound of the unoccluded contribution there.
+        let floor = |px: f32, pz: f32| {
+            let si = scene.geometry.intersect(&Ray::new(Vec3A::new(px, 1.0, pz), -Vec3A::Y)).unwrap();
+            Receiver { bsdf: sh.bsdf(&si).unwrap(), si, wo: Vec3A::new(0.0, 1.0, -1.0).normalize() }
+        };
+        let mut rng = Rng::new(9);
+        for (cx, cz, radius) in [(0.013, 0.021, 0.3), (-1.0, 1.2, 0.6), (1.5, -1.37, 0.1)] {
+            let x = floor(cx, cz);
+            for _ in 0..20 {
+                let [a, b] = rng.uniform2();
+                let (r, phi) = (radius * a.sqrt(), std::f32::consts::TAU * b);
+                let y = floor(cx + r * phi.cos(), cz + r * phi.sin());
+                for j in 0..v.len() {
+                    let at_y = v.unoccluded(&sh, j, &y).map_or(0.0, |u| luminance(u.value));
+                    let bound = v.bound(&sh, j, &x, radius);
+                    assert!(at_y <= bound * (1.0 + 1e-4) + 1e-9, "VPL {j} ({:?}): {at_y} > {bound}", v.list[j].emitter);
+                }
+            }
+        }
     }
 }

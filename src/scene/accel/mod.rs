@@ -617,6 +617,20 @@ mod tests {
     }
 
     #[test]
+    fn directions_with_negative_zero_components_hit() {
+        // −(0, 0, 1) is (−0, −0, −1): the slab test must take −0 as a negative direction, as its reciprocal
+        // is (it once took it as positive and missed every box).
+        let mut prims = quad(-2.0, 0);
+        prims.extend(quad(-4.0, 1));
+        let a = Accel::build(prims, vec![], vec![], vec![], vec![], vec![]);
+        for o in [Vec3A::new(0.013, 0.021, 0.0), Vec3A::new(-0.5, 0.3, 0.0)] {
+            let h = a.intersect(&Ray::new(o, -Vec3A::Z)).expect("the quad below");
+            assert!((h.t - 2.0).abs() < 1e-6);
+            assert!(a.occluded(&Ray::new(o, -Vec3A::Z)));
+        }
+    }
+
+    #[test]
     fn empty_scenes_hit_nothing() {
         let a = Accel::build(vec![], vec![], vec![], vec![], vec![], vec![]);
         assert!(a.intersect(&Ray::new(Vec3A::ZERO, Vec3A::Z)).is_none());

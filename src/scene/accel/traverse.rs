@@ -77,9 +77,9 @@ impl Traversal {
     /// for the direction's octant).
     #[inline(always)]
     pub fn new(bvh: &CwBvh, d: Vec3A) -> Self {
-        let oct_inv4 = (if d.x < 0.0 { 0 } else { 0x0404_0404 })
-            | (if d.y < 0.0 { 0 } else { 0x0202_0202 })
-            | (if d.z < 0.0 { 0 } else { 0x0101_0101 });
+        let oct_inv4 = (if d.x.is_sign_negative() { 0 } else { 0x0404_0404 })
+            | (if d.y.is_sign_negative() { 0 } else { 0x0202_0202 })
+            | (if d.z.is_sign_negative() { 0 } else { 0x0101_0101 });
         Traversal {
             stack: Stack { data: [MaybeUninit::uninit(); STACK_SIZE], index: 0 },
             current_group: if bvh.nodes.is_empty() { UVec2::ZERO } else { uvec2(0, 0x8000_0000) },
@@ -110,7 +110,7 @@ impl TravRay {
     pub fn new(o: Vec3A, d: Vec3A, t_max: f32) -> Self {
         let safe = |v: f32| if v.abs() < TINY { TINY.copysign(v) } else { v };
         let inv_d = Vec3A::new(1.0 / safe(d.x), 1.0 / safe(d.y), 1.0 / safe(d.z));
-        TravRay { o, inv_d, neg: [d.x < 0.0, d.y < 0.0, d.z < 0.0], t_max }
+        TravRay { o, inv_d, neg: [d.x.is_sign_negative(), d.y.is_sign_negative(), d.z.is_sign_negative()], t_max }
     }
 }
 
