@@ -26,7 +26,12 @@ fn loaded_text(text: &str) -> LoadedScene {
     load_str(text, Path::new("inline.pbrt"), LoadOptions::default()).unwrap_or_else(|e| panic!("load: {e}"))
 }
 
-fn render_with(loaded: &LoadedScene, set: &[(&str, &str)], seed: u64, threads: Option<usize>) -> cachert::Result<RenderOutput> {
+fn render_with(
+    loaded: &LoadedScene,
+    set: &[(&str, &str)],
+    seed: u64,
+    threads: Option<usize>,
+) -> cachert::Result<RenderOutput> {
     let settings = RenderSettings {
         integrator: Some("importancecache".into()),
         set: set.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
@@ -98,7 +103,13 @@ fn worst_z(loaded: &LoadedScene, set: &[(&str, &str)], reference: &[f64; 4]) -> 
         let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (xs.len() - 1) as f64;
         let se = (var / xs.len() as f64).sqrt();
         // A quadrant the estimator gets exactly (no light) has se = 0 and must match to rounding.
-        let z = if se > 0.0 { (mean - reference[q]).abs() / se } else if (mean - reference[q]).abs() <= 1e-6 * reference[q].abs().max(1e-6) { 0.0 } else { f64::INFINITY };
+        let z = if se > 0.0 {
+            (mean - reference[q]).abs() / se
+        } else if (mean - reference[q]).abs() <= 1e-6 * reference[q].abs().max(1e-6) {
+            0.0
+        } else {
+            f64::INFINITY
+        };
         eprintln!("  {set:?} quadrant {q}: mean {mean:.6} ref {:.6} se {se:.2e} z {z:.2}", reference[q]);
         worst = worst.max(z);
     }
@@ -117,7 +128,14 @@ fn cached_estimates_are_unbiased_for_every_technique_alone_and_combined_where_ea
     let base = [("vpls", "256"), ("caches", "12"), ("subpixels", "4")];
     let r = reference(&loaded, &base);
     assert!(r.iter().all(|&v| v > 0.0), "{r:?}");
-    for (dist, mis) in [("f", "balance"), ("u", "balance"), ("b", "balance"), ("c", "balance"), ("fubc", "balance"), ("fubc", "alphamax")] {
+    for (dist, mis) in [
+        ("f", "balance"),
+        ("u", "balance"),
+        ("b", "balance"),
+        ("c", "balance"),
+        ("fubc", "balance"),
+        ("fubc", "alphamax"),
+    ] {
         let mut set = base.to_vec();
         set.extend([("distributions", dist), ("mis", mis), ("placement", "vgc+dgs")]);
         let z = worst_z(&loaded, &set, &r);
@@ -151,7 +169,8 @@ fn the_conservative_technique_keeps_vpls_occluded_at_the_caches_reachable() {
     // shadowed cache gives the light's VPLs zero F density, yet it serves lit points at the shadow's edge.
     // F with C is unbiased; F alone loses their light, and the test must see it.
     let loaded = loaded_text(&shadowed_floor(24));
-    let base = [("vpls", "64"), ("vpldepth", "1"), ("caches", "12"), ("M", "1"), ("subpixels", "4"), ("placement", "im")];
+    let base =
+        [("vpls", "64"), ("vpldepth", "1"), ("caches", "12"), ("M", "1"), ("subpixels", "4"), ("placement", "im")];
     let r = reference(&loaded, &base);
     let mut with_c = base.to_vec();
     with_c.push(("distributions", "fc"));
@@ -194,16 +213,28 @@ fn the_vpl_solution_matches_pbrt_v3_path_on_the_cornell_box() {
         }
         s / n as f64
     };
-    let loaded = load(&dir.join("path-ref.pbrt"), LoadOptions { resolution: Some([w as u32, h as u32]), ..Default::default() }).unwrap();
+    let loaded =
+        load(&dir.join("path-ref.pbrt"), LoadOptions { resolution: Some([w as u32, h as u32]), ..Default::default() })
+            .unwrap();
     let mut means = Vec::new();
     for seed in 0..8 {
         let s = seed.to_string();
-        let set = [("placement", "none"), ("vpls", "8192"), ("vpldepth", "4"), ("clamp", "0"), ("subpixels", "1"), ("vplseed", &s)];
+        let set = [
+            ("placement", "none"),
+            ("vpls", "8192"),
+            ("vpldepth", "4"),
+            ("clamp", "0"),
+            ("subpixels", "1"),
+            ("vplseed", &s),
+        ];
         means.push(masked_mean(&image(&loaded, &set, 1)));
     }
     let ours = means.iter().sum::<f64>() / means.len() as f64;
     let theirs = masked_mean(&reference);
-    eprintln!("VPL solution off the light {means:?}: {ours:.5} vs pbrt-v3 path {theirs:.5} ({:+.2} %)", 100.0 * (ours / theirs - 1.0));
+    eprintln!(
+        "VPL solution off the light {means:?}: {ours:.5} vs pbrt-v3 path {theirs:.5} ({:+.2} %)",
+        100.0 * (ours / theirs - 1.0)
+    );
     assert!((ours / theirs - 1.0).abs() < 0.01, "{ours} vs {theirs}");
     // The clamp only removes energy.
     let set = [("placement", "none"), ("vpls", "2048"), ("vpldepth", "4"), ("subpixels", "1")];

@@ -632,7 +632,8 @@ fn light_paths_carry_each_lights_emitted_flux() {
     // environment's): a one-sided quad πAL, two-sided 2πAL, a sphere π·4πr²·L, a point light 4πI, a spot
     // with a hard edge 2π(1 − cos θ)·I, a distant light L·πR² and a constant environment 4πL·πR² through
     // the world's bounding disk (R: its radius; the floor makes it √200 here).
-    let quad = "Shape \"trianglemesh\" \"point P\" [-1 -1 3  1 -1 3  1 1 3  -1 1 3] \"integer indices\" [0 2 1 0 3 2]\n";
+    let quad =
+        "Shape \"trianglemesh\" \"point P\" [-1 -1 3  1 -1 3  1 1 3  -1 1 3] \"integer indices\" [0 2 1 0 3 2]\n";
     let world_r = (20.0f32 * 20.0 + 20.0 * 20.0).sqrt() / 2.0;
     let cases: Vec<(&str, String, f32)> = vec![
         ("one-sided quad", format!("AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [2 2 2]\n{quad}AttributeEnd\n"), PI * 4.0 * 2.0),
@@ -656,7 +657,9 @@ fn light_paths_carry_each_lights_emitted_flux() {
         ("infinite", "LightSource \"infinite\" \"rgb L\" [0.5 0.5 0.5]\n".into(), 4.0 * PI * 0.5 * PI * world_r * world_r),
     ];
     for (name, light, flux) in cases {
-        let text = format!("LookAt 0 0 10 0 0 0 0 1 0\nCamera \"perspective\"\nWorldBegin\n{light}Material \"matte\"\n{FLOOR}WorldEnd\n");
+        let text = format!(
+            "LookAt 0 0 10 0 0 0 0 1 0\nCamera \"perspective\"\nWorldBegin\n{light}Material \"matte\"\n{FLOOR}WorldEnd\n"
+        );
         let loaded = load(&text);
         let lights = build_lights(&loaded.scene);
         assert_eq!(lights.len(), if name.ends_with("quad") { 2 } else { 1 }, "{name}");

@@ -28,7 +28,7 @@ use glam::Vec3A;
 use crate::error::{Error, Result, Warnings};
 use crate::gbuffer::ShadingPoint;
 use crate::render::directlighting::MAX_DEPTH;
-use crate::render::lighting::{ShadePoint, Shading, estimate_direct};
+use crate::render::lighting::{PassThrough, ShadePoint, Shading, estimate_direct};
 use crate::render::params::{IntegratorParams, Parameter};
 use crate::sampling::warp::equal_area_hemisphere;
 use crate::sampling::{Frame, Rng};
@@ -40,9 +40,6 @@ use crate::shading::light::LightSelect;
 use crate::shading::{Spectrum, luminance};
 
 use super::{Application, Neighbour, PerPixelTerm};
-
-/// Most surfaces without a material a gathering path passes through before it gives up.
-const MAX_PASS_THROUGH: usize = 1024;
 
 /// Samples of the fixed set that estimates ρ_hd of non-Lambertian lobes (an 8×8 stratified grid).
 const RHO_SIDE: usize = 8;
@@ -151,7 +148,7 @@ impl IrradianceCache {
         let mut beta = Spectrum::ONE;
         let mut specular = false;
         let mut vertices = 0u32;
-        let mut passes = 0usize;
+        let mut pass = PassThrough::default();
         loop {
             rays.camera += 1;
             let Some(si) = scene.geometry.intersect(&ray) else {
@@ -168,13 +165,13 @@ impl IrradianceCache {
             if vertices >= self.max_depth {
                 break;
             }
-            let Some(bsdf) = sh.bsdf(&si) else {
-                passes += 1;
-                if passes > MAX_PASS_THROUGH {
-                    break;
+            let bsdf = match pass.bsdf(sh, &si, &ray) {
+                Ok(b) => b,
+                Err(Some(next)) => {
+                    ray = next;
+                    continue;
                 }
-                ray = si.spawn_ray(ray.d);
-                continue;
+                Err(None) => break,
             };
             let wo = -ray.d;
             let x = ShadePoint { si: &si, bsdf: &bsdf, wo };
@@ -245,6 +242,8 @@ impl Application for IrradianceCache {
             "indirect: cached indirect light only; full: plus emission and directlighting per pixel",
         ),
     ];
+
+    const PAPER_CACHES: usize = 40_000;
 
     type Record = IrradianceRecord;
     type Prepared<'s> = Lit<'s>;

@@ -87,6 +87,10 @@ pub trait Application: Sync + Sized {
     /// table under the application's name.
     const PARAMETERS: &'static [Parameter];
 
+    /// The paper's cache budget for this application at 1920×1080 (ALGORITHMS.md §7): the default budget
+    /// `caches` scales it to the image's pixels.
+    const PAPER_CACHES: usize = 120_000;
+
     /// Whether the `vgc+dgs` placement's discontinuity map has the geometry term G′ (Eq. 3) beside the
     /// record differences: the paper's finding is that importance caching does better without it. The
     /// ablations `vgc+dgs:diff` and `vgc+dgs:geom` fix their terms whatever this says.

@@ -11,18 +11,7 @@ use plotters::prelude::*;
 use crate::error::{Error, Result};
 
 use super::irc_peer::PeerRow;
-
-/// Colours of the series, in order of first appearance.
-const PALETTE: [RGBColor; 8] = [
-    RGBColor(0, 0, 0),
-    RGBColor(120, 120, 120),
-    RGBColor(213, 94, 0),
-    RGBColor(0, 114, 178),
-    RGBColor(0, 158, 115),
-    RGBColor(204, 121, 167),
-    RGBColor(230, 159, 0),
-    RGBColor(86, 180, 233),
-];
+use crate::experiment::chart::PALETTE;
 
 /// Writes the chart of `rows` to `path`.
 pub fn write(rows: &[PeerRow], path: &Path) -> Result<()> {

@@ -12,8 +12,8 @@ use plotters::prelude::*;
 use super::Row;
 use crate::error::{Error, Result};
 
-/// Colours of the series, in order of first appearance.
-const PALETTE: [RGBColor; 10] = [
+/// Colours of the series, in order of first appearance (the charts of `cli` use them too).
+pub const PALETTE: [RGBColor; 10] = [
     RGBColor(0, 0, 0),
     RGBColor(213, 94, 0),
     RGBColor(0, 114, 178),
@@ -54,18 +54,25 @@ pub fn series(rows: &[Row], scene: &str) -> Vec<(String, Vec<Point>)> {
     }
     for (name, points) in &mut out {
         let same = |r: &&&Row| {
-            r.placement == *name || r.placement.split_once(':').is_some_and(|(l, n)| l == name && n.parse::<u32>().is_ok())
+            r.placement == *name
+                || r.placement.split_once(':').is_some_and(|(l, n)| l == name && n.parse::<u32>().is_ok())
         };
-        let mut keys: Vec<(usize, String)> = mine.iter().filter(same).map(|r| (r.caches, r.placement.clone())).collect();
+        let mut keys: Vec<(usize, String)> =
+            mine.iter().filter(same).map(|r| (r.caches, r.placement.clone())).collect();
         keys.dedup();
         keys.sort();
         keys.dedup();
         for (caches, placement) in keys {
-            let sel: Vec<&Row> = mine.iter().filter(|r| r.caches == caches && r.placement == placement).copied().collect();
+            let sel: Vec<&Row> =
+                mine.iter().filter(|r| r.caches == caches && r.placement == placement).copied().collect();
             let n = sel.len() as f64;
             let stat = |f: fn(&Row) -> f64| {
                 let v: Vec<f64> = sel.iter().map(|r| f(r)).collect();
-                (v.iter().sum::<f64>() / n, v.iter().copied().fold(f64::INFINITY, f64::min), v.iter().copied().fold(0.0, f64::max))
+                (
+                    v.iter().sum::<f64>() / n,
+                    v.iter().copied().fold(f64::INFINITY, f64::min),
+                    v.iter().copied().fold(0.0, f64::max),
+                )
             };
             points.push(Point {
                 secs: sel.iter().map(|r| r.stats.times.total).sum::<f64>() / n,

@@ -9,7 +9,6 @@
 //! Depends on `scene`, `render`, `application` (the registry), `image` and `metrics`; only `experiment`
 //! uses it.
 
-
 use crate::application::registry::{self, WithApplication};
 use crate::application::{Application, Baseline};
 use crate::error::{Error, Result, Warnings};

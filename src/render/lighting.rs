@@ -11,6 +11,7 @@ use glam::Vec3A;
 use crate::error::{Result, Warnings};
 use crate::scene::Scene;
 use crate::scene::geometry::SurfaceInteraction;
+use crate::scene::ray::Ray;
 use crate::shading::Spectrum;
 use crate::shading::bsdf::Bsdf;
 use crate::shading::bxdf::BxdfFlags;
@@ -51,6 +52,36 @@ impl<'a> Shading<'a> {
     #[inline]
     pub fn bsdf(&self, si: &SurfaceInteraction) -> Option<Bsdf> {
         self.materials.bsdf_with(si.material, si, &self.textures, self.multiple_lobes)
+    }
+}
+
+/// Most surfaces without a material one path passes through before it gives up.
+pub const MAX_PASS_THROUGH: usize = 1024;
+
+/// Counts the surfaces without a material a path has passed through (pbrt-v3's integrators skip them and
+/// go on along the same ray).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PassThrough {
+    passes: usize,
+}
+
+impl PassThrough {
+    /// The BSDF at `si`, or for a surface without material the ray that continues past it (`None` once the
+    /// path has passed [`MAX_PASS_THROUGH`] of them: it gives up).
+    #[inline]
+    pub fn bsdf(
+        &mut self,
+        sh: &Shading<'_>,
+        si: &SurfaceInteraction,
+        ray: &Ray,
+    ) -> std::result::Result<Bsdf, Option<Ray>> {
+        match sh.bsdf(si) {
+            Some(b) => Ok(b),
+            None => {
+                self.passes += 1;
+                Err((self.passes <= MAX_PASS_THROUGH).then(|| si.spawn_ray(ray.d)))
+            }
+        }
     }
 }
 

@@ -16,13 +16,10 @@ use crate::shading::bxdf::BxdfFlags;
 use crate::shading::light::{LightSelect, SpatialSelect};
 
 use super::directlighting::read_max_depth;
-use super::lighting::{ShadePoint, Shading, sample_one_light};
+use super::lighting::{PassThrough, ShadePoint, Shading, sample_one_light};
 use super::params::IntegratorParams;
 use super::samples::PixelSamples;
 use super::{PixelIntegrator, RayCounters};
-
-/// Most surfaces without a material a path passes through before it gives up.
-const MAX_PASS_THROUGH: usize = 1024;
 
 /// pbrt-v3's `path` integrator.
 ///
@@ -89,7 +86,7 @@ impl PixelIntegrator for Path<'_> {
         let mut specular_bounce = false;
         let mut eta_scale = 1.0f32;
         let mut bounces = 0u32;
-        let mut passes = 0usize;
+        let mut pass = PassThrough::default();
         loop {
             c.camera += 1;
             let hit = scene.geometry.intersect(&ray);
@@ -104,13 +101,13 @@ impl PixelIntegrator for Path<'_> {
             if bounces >= self.max_depth {
                 break;
             }
-            let Some(bsdf) = sh.bsdf(&si) else {
-                passes += 1;
-                if passes > MAX_PASS_THROUGH {
-                    break;
+            let bsdf = match pass.bsdf(sh, &si, &ray) {
+                Ok(b) => b,
+                Err(Some(next)) => {
+                    ray = next;
+                    continue;
                 }
-                ray = si.spawn_ray(ray.d);
-                continue;
+                Err(None) => break,
             };
             let wo = -ray.d;
             let x = ShadePoint { si: &si, bsdf: &bsdf, wo };

@@ -42,7 +42,7 @@ const WEIGHTS: [u32; 256] = {
 /// The code whose weight is nearest to `x` (in ratio), for 0 ≤ x ≤ [`MAX_WEIGHT`]; 0 below half the
 /// smallest weight.
 fn code_of(x: f32) -> u8 {
-    if !(x >= 8.0) {
+    if x.is_nan() || x < 8.0 {
         return 0;
     }
     if x <= 16.0 {
@@ -70,7 +70,7 @@ impl Quantised {
     /// `None` when every weight is 0.
     pub fn new(weights: &[f32]) -> Option<Self> {
         let max = weights.iter().copied().filter(|w| w.is_finite()).fold(0.0f32, f32::max);
-        if !(max > 0.0) {
+        if max <= 0.0 {
             return None;
         }
         let to_int = MAX_WEIGHT as f32 / max;

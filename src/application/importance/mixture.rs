@@ -116,15 +116,26 @@ mod tests {
         // is zero in every stored distribution, and one cache's F is all zero.
         let q = |w: &[f32]| Quantised::new(w);
         vec![
-            [q(&[1.0, 2.0, 0.0, 4.0, 0.0, 0.0]), q(&[1.0, 2.0, 3.0, 4.0, 5.0, 0.0]), q(&[2.0, 2.0, 3.0, 4.0, 9.0, 0.0])],
+            [
+                q(&[1.0, 2.0, 0.0, 4.0, 0.0, 0.0]),
+                q(&[1.0, 2.0, 3.0, 4.0, 5.0, 0.0]),
+                q(&[2.0, 2.0, 3.0, 4.0, 9.0, 0.0]),
+            ],
             [None, q(&[0.0, 0.0, 3.0, 1.0, 1.0, 0.0]), q(&[1.0, 1.0, 3.0, 1.0, 1.0, 0.0])],
             [q(&[0.0, 5.0, 1.0, 0.0, 0.0, 0.0]), None, q(&[1.0; 6])],
         ]
     }
 
     /// The exact expectation of the estimator for contributions `i`: Σ_t Σ_j p_t(j)·factor_t(j)·I_j.
-    fn expectation(m: &Mixture<impl Iterator<Item = &'static [Option<Quantised>; 3]> + Clone>, i: &[f32], mis: Mis) -> f32 {
-        (0..4).filter(|&t| m.active(t)).map(|t| (0..i.len()).map(|j| m.pdf(t, j) * m.factor(t, j, mis) * i[j]).sum::<f32>()).sum()
+    fn expectation(
+        m: &Mixture<impl Iterator<Item = &'static [Option<Quantised>; 3]> + Clone>,
+        i: &[f32],
+        mis: Mis,
+    ) -> f32 {
+        (0..4)
+            .filter(|&t| m.active(t))
+            .map(|t| (0..i.len()).map(|j| m.pdf(t, j) * m.factor(t, j, mis) * i[j]).sum::<f32>())
+            .sum()
     }
 
     #[test]
@@ -166,17 +177,18 @@ mod tests {
             for _ in 0..n {
                 hits[m.sample(t, &mut rng).unwrap()] += 1;
             }
-            for j in 0..6 {
+            for (j, &h) in hits.iter().enumerate() {
                 let p = m.pdf(t, j) as f64;
                 let sd = (p * (1.0 - p) / n as f64).sqrt();
-                assert!((hits[j] as f64 / n as f64 - p).abs() <= 5.0 * sd + 1e-9, "t {t} j {j}");
+                assert!((h as f64 / n as f64 - p).abs() <= 5.0 * sd + 1e-9, "t {t} j {j}");
             }
         }
     }
 
     #[test]
     fn a_technique_no_cache_can_draw_from_is_inactive() {
-        let only: &'static [[Option<Quantised>; 3]] = Box::leak(vec![[None, None, Quantised::new(&[1.0, 1.0])]].into_boxed_slice());
+        let only: &'static [[Option<Quantised>; 3]] =
+            Box::leak(vec![[None, None, Quantised::new(&[1.0, 1.0])]].into_boxed_slice());
         let m = Mixture::new(only.iter(), [true; 4], 2);
         assert!(!m.active(0) && !m.active(1) && m.active(2) && m.active(3));
         assert_eq!(m.sample(0, &mut Rng::new(1)), None);

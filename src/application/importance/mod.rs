@@ -108,7 +108,7 @@ impl Lit<'_> {
     fn receiver(&self, s: &ShadingPoint) -> Option<Receiver> {
         let si = s.interaction()?;
         let bsdf = self.shading.bsdf(&si)?;
-        Some(Receiver { si, bsdf, wo: s.wo })
+        Some(Receiver::new(si, bsdf, s.wo))
     }
 
     /// Emission seen directly at a sample.
@@ -127,7 +127,7 @@ impl Lit<'_> {
     /// A VPL drawn in proportion to its flux, with its probability.
     fn sample_power(&self, rng: &mut Rng) -> Option<(usize, f64)> {
         let total = *self.flux_cdf.last()?;
-        if !(total > 0.0) {
+        if total.is_nan() || total <= 0.0 {
             return None;
         }
         let target = (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64) * total;
@@ -172,13 +172,29 @@ impl ImportanceCache {
 
 impl Application for ImportanceCache {
     const NAME: &'static str = "importancecache";
-    const ABOUT: &'static str = "importance caching: light from virtual point lights drawn by MIS from cached distributions";
+    const ABOUT: &'static str =
+        "importance caching: light from virtual point lights drawn by MIS from cached distributions";
     const PARAMETERS: &'static [Parameter] = &[
         Parameter::new("vpls", "integer", "8192", "virtual point lights (direct and indirect light)"),
         Parameter::new("vpldepth", "integer", "5", "most surface vertices of a light path"),
-        Parameter::new("vplseed", "integer", "0", "seed of the VPLs (fixed across --seed, so seeds share one reference)"),
-        Parameter::new("clamp", "float", "0.025", "distance clamp d_c as a fraction of L (estimator and reference alike)"),
-        Parameter::new("distributions", "string", "fubc", "techniques that draw: f full, u unoccluded, b bounded, c conservative"),
+        Parameter::new(
+            "vplseed",
+            "integer",
+            "0",
+            "seed of the VPLs (fixed across --seed, so seeds share one reference)",
+        ),
+        Parameter::new(
+            "clamp",
+            "float",
+            "0.025",
+            "distance clamp d_c as a fraction of L (estimator and reference alike)",
+        ),
+        Parameter::new(
+            "distributions",
+            "string",
+            "fubc",
+            "techniques that draw: f full, u unoccluded, b bounded, c conservative",
+        ),
         Parameter::new("mis", "string", "balance", "combination of the techniques: balance or alphamax"),
         Parameter::new(
             "sampling",
@@ -186,9 +202,15 @@ impl Application for ImportanceCache {
             "cache",
             "cache: importance caching; uniform or power: many-light baselines without caches",
         ),
-        Parameter::new("draws", "integer", "0", "VPLs the uniform and power baselines draw per sample (0: one per technique)"),
+        Parameter::new(
+            "draws",
+            "integer",
+            "0",
+            "VPLs the uniform and power baselines draw per sample (0: one per technique)",
+        ),
     ];
     const DGS_GEOMETRY: bool = false;
+    const PAPER_CACHES: usize = 25_000;
 
     type Record = ImportanceRecord;
     type Prepared<'s> = Lit<'s>;
@@ -334,13 +356,7 @@ impl Application for ImportanceCache {
         }
     }
 
-    fn compute_record(
-        &self,
-        cx: &Lit<'_>,
-        at: &ShadingPoint,
-        _: &mut Rng,
-        rays: &mut RayCounters,
-    ) -> ImportanceRecord {
+    fn compute_record(&self, cx: &Lit<'_>, at: &ShadingPoint, _: &mut Rng, rays: &mut RayCounters) -> ImportanceRecord {
         let Some(x) = cx.receiver(at) else { return ImportanceRecord { at: *at, dists: [None, None, None] } };
         let n = cx.vpls.len();
         let mut unoccluded = vec![0.0f32; n];

@@ -24,7 +24,7 @@
 
 use glam::Vec3A;
 
-use crate::render::lighting::Shading;
+use crate::render::lighting::{PassThrough, Shading};
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::scene::geometry::SurfaceInteraction;
@@ -33,9 +33,6 @@ use crate::shading::bsdf::Bsdf;
 use crate::shading::bxdf::{Bxdf, BxdfFlags};
 use crate::shading::light::{EmitterPoint, LightSelect, SurfacePoint, spawn_ray_to};
 use crate::shading::{Spectrum, luminance};
-
-/// Most surfaces without a material a light path passes through before it is dropped.
-const MAX_PASS_THROUGH: usize = 1024;
 
 /// How a VPL sends light toward a receiver.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -113,6 +110,41 @@ pub struct Receiver {
     pub bsdf: Bsdf,
     /// Unit direction toward the viewer.
     pub wo: Vec3A,
+    /// R/π when every non-specular lobe is Lambertian reflection (then f needs no lobe walk).
+    lambert: Option<Spectrum>,
+}
+
+impl Receiver {
+    /// The receiver at `si` with BSDF `bsdf`, seen from `wo`.
+    pub fn new(si: SurfaceInteraction, bsdf: Bsdf, wo: Vec3A) -> Self {
+        Receiver { si, bsdf, wo, lambert: lambertian(&bsdf) }
+    }
+
+    /// f(ω_o, `wi`) over the non-specular lobes (specular ones are 0 for any given direction).
+    #[inline]
+    fn f(&self, wi: Vec3A) -> Spectrum {
+        match self.lambert {
+            Some(r) => {
+                let ng = self.bsdf.geometric_normal();
+                let (a, b) = (self.wo.dot(ng), wi.dot(ng));
+                if a * b > 0.0 && self.bsdf.to_local(self.wo).z != 0.0 { r } else { Spectrum::ZERO }
+            }
+            None => self.bsdf.f(self.wo, wi, BxdfFlags::ALL),
+        }
+    }
+}
+
+/// R/π summed over the Lambertian lobes when every non-specular lobe of `bsdf` is Lambertian reflection.
+fn lambertian(bsdf: &Bsdf) -> Option<Spectrum> {
+    let mut r = Spectrum::ZERO;
+    for (b, scale) in bsdf.lobes() {
+        match b {
+            Bxdf::Lambertian(l) => r += scale * l.r,
+            _ if b.flags().contains(BxdfFlags::SPECULAR) => {}
+            _ => return None,
+        }
+    }
+    Some(r * std::f32::consts::FRAC_1_PI)
 }
 
 /// What a VPL sends to a receiver before visibility: the RGB contribution and the shadow ray that decides
@@ -143,7 +175,13 @@ impl Vpls {
         clamp: f32,
         rng: &mut Rng,
     ) -> Vpls {
-        let mut v = Vpls { list: Vec::with_capacity(count), bsdfs: Vec::new(), paths: 0, clamp2: clamp * clamp, flux: Vec::new() };
+        let mut v = Vpls {
+            list: Vec::with_capacity(count),
+            bsdfs: Vec::new(),
+            paths: 0,
+            clamp2: clamp * clamp,
+            flux: Vec::new(),
+        };
         let mut rho_u = [[0.0f32; 2]; 16];
         for (i, u) in rho_u.iter_mut().enumerate() {
             *u = [((i % 4) as f32 + 0.5) / 4.0, ((i / 4) as f32 + 0.5) / 4.0];
@@ -158,16 +196,16 @@ impl Vpls {
             let mut beta = start.beta / pmf;
             let beta0 = beta.max_element();
             let mut ray = start.ray;
-            let (mut depth, mut passes) = (0u32, 0usize);
+            let (mut depth, mut pass) = (0u32, PassThrough::default());
             while v.list.len() < count && depth < max_depth {
                 let Some(si) = scene.geometry.intersect(&ray) else { break };
-                let Some(bsdf) = sh.bsdf(&si) else {
-                    passes += 1;
-                    if passes > MAX_PASS_THROUGH {
-                        break;
+                let bsdf = match pass.bsdf(sh, &si, &ray) {
+                    Ok(b) => b,
+                    Err(Some(next)) => {
+                        ray = next;
+                        continue;
                     }
-                    ray = si.spawn_ray(ray.d);
-                    continue;
+                    Err(None) => break,
                 };
                 depth += 1;
                 let wi = -ray.d.normalize();
@@ -223,11 +261,25 @@ impl Vpls {
                 let le = lights.emission(light, at, sp.n);
                 let power = le * weight;
                 let sides = if two_sided { 2.0 } else { 1.0 };
-                let v = Vpl { p: sp.p, p_error: sp.p_error, ng: sp.n, ns: sp.n, power, emitter: Emitter::Cosine { two_sided } };
+                let v = Vpl {
+                    p: sp.p,
+                    p_error: sp.p_error,
+                    ng: sp.n,
+                    ns: sp.n,
+                    power,
+                    emitter: Emitter::Cosine { two_sided },
+                };
                 return self.push(v, luminance(power) * PI * sides);
             }
             EmitterPoint::Point(p) => {
-                let base = Vpl { p, p_error: Vec3A::ZERO, ng: Vec3A::ZERO, ns: Vec3A::ZERO, power: Spectrum::ZERO, emitter: Emitter::Isotropic };
+                let base = Vpl {
+                    p,
+                    p_error: Vec3A::ZERO,
+                    ng: Vec3A::ZERO,
+                    ns: Vec3A::ZERO,
+                    power: Spectrum::ZERO,
+                    emitter: Emitter::Isotropic,
+                };
                 if lights.is_delta_point(light) {
                     let i = lights.emission(light, at, Vec3A::Z);
                     Vpl { power: i * weight, ..base }
@@ -257,7 +309,8 @@ impl Vpls {
         // The emitting side is the side the light arrived on.
         let side = if wi.dot(si.ng) >= 0.0 { 1.0 } else { -1.0 };
         let (ng, ns) = (si.ng * side, si.ns * side);
-        let lambert = bsdf.lobes().all(|(b, _)| matches!(b, Bxdf::Lambertian(_)) || b.flags().contains(BxdfFlags::SPECULAR));
+        let lambert =
+            bsdf.lobes().all(|(b, _)| matches!(b, Bxdf::Lambertian(_)) || b.flags().contains(BxdfFlags::SPECULAR));
         let rho = bsdf.rho_hd(wi, rho_u);
         let flux = luminance(beta * rho);
         if lambert {
@@ -307,22 +360,22 @@ impl Vpls {
         let vpl = &self.list[j];
         if let Emitter::Directional = vpl.emitter {
             let w = vpl.ng;
-            let value = vpl.power * x.bsdf.f(x.wo, w, BxdfFlags::ALL) * w.dot(x.bsdf.shading_normal()).abs();
+            let value = vpl.power * x.f(w) * w.dot(x.bsdf.shading_normal()).abs();
             return (value.max_element() > 0.0).then(|| Unoccluded { value, shadow: x.si.spawn_ray(w) });
         }
         let d = vpl.p - x.si.p;
         let d2 = d.length_squared();
-        if !(d2 > 0.0) {
+        if d2.is_nan() || d2 <= 0.0 {
             return None;
         }
         let w = d / d2.sqrt();
-        let f = x.bsdf.f(x.wo, w, BxdfFlags::ALL);
+        let f = x.f(w);
         if f.max_element() <= 0.0 {
             return None;
         }
         let e = self.emitted(sh, vpl, -w);
         let value = e * f * (w.dot(x.bsdf.shading_normal()).abs() / d2.max(self.clamp2));
-        if !(value.max_element() > 0.0) {
+        if value.max_element().is_nan() || value.max_element() <= 0.0 {
             return None;
         }
         let to = SurfacePoint { p: vpl.p, p_error: vpl.p_error, n: vpl.ng };
@@ -331,7 +384,14 @@ impl Vpls {
 
     /// I_j(x) with visibility (one shadow ray when the unoccluded value is not 0).
     #[inline]
-    pub fn contribution(&self, scene: &Scene, sh: &Shading<'_>, j: usize, x: &Receiver, rays: &mut RayCounters) -> Spectrum {
+    pub fn contribution(
+        &self,
+        scene: &Scene,
+        sh: &Shading<'_>,
+        j: usize,
+        x: &Receiver,
+        rays: &mut RayCounters,
+    ) -> Spectrum {
         match self.unoccluded(sh, j, x) {
             Some(u) => {
                 rays.shadow += 1;
@@ -348,15 +408,15 @@ impl Vpls {
     pub fn bound(&self, sh: &Shading<'_>, j: usize, x: &Receiver, radius: f32) -> f32 {
         let vpl = &self.list[j];
         if let Emitter::Directional = vpl.emitter {
-            return luminance(vpl.power * x.bsdf.f(x.wo, vpl.ng, BxdfFlags::ALL));
+            return luminance(vpl.power * x.f(vpl.ng));
         }
         let d = vpl.p - x.si.p;
         let dist = d.length();
-        if !(dist > 0.0) {
+        if dist.is_nan() || dist <= 0.0 {
             return 0.0;
         }
         let w = d / dist;
-        let f = x.bsdf.f(x.wo, w, BxdfFlags::ALL);
+        let f = x.f(w);
         if f.max_element() <= 0.0 {
             return 0.0;
         }
@@ -413,6 +473,29 @@ mod tests {
         AttributeEnd\nLightSource \"point\" \"point from\" [1 1 -1] \"rgb I\" [2 2 2]\nWorldEnd\n";
 
     #[test]
+    fn the_lambertian_shortcut_equals_the_bsdf() {
+        use crate::shading::bxdf::lambert::LambertianReflection;
+        let n = Vec3A::new(0.1, 0.2, 1.0).normalize();
+        let mut bsdf = Bsdf::new(n, n, Vec3A::X, 1.0);
+        bsdf.add(Bxdf::Lambertian(LambertianReflection { r: Spectrum::splat(0.6) }));
+        let si = SurfaceInteraction { ng: n, ns: n, ..dummy_interaction() };
+        let x = Receiver::new(si, bsdf, Vec3A::new(0.3, -0.1, 0.9).normalize());
+        assert!(x.lambert.is_some());
+        let mut rng = Rng::new(2);
+        for _ in 0..1000 {
+            let [a, b] = rng.uniform2();
+            let w = crate::sampling::warp::uniform_sphere([a, b]);
+            let (a, b) = (x.f(w), bsdf.f(x.wo, w, BxdfFlags::ALL));
+            assert!((a - b).abs().max_element() <= 1e-6 * b.max_element(), "{w:?}: {a:?} vs {b:?}");
+        }
+    }
+
+    fn dummy_interaction() -> SurfaceInteraction {
+        let loaded = load_str(ROOM, Path::new("room.pbrt"), LoadOptions::default()).unwrap();
+        loaded.scene.geometry.intersect(&Ray::new(Vec3A::new(0.1, 1.0, 0.2), -Vec3A::Y)).unwrap()
+    }
+
+    #[test]
     fn the_bound_holds_over_the_region_and_generation_is_deterministic() {
         let loaded = load_str(ROOM, Path::new("room.pbrt"), LoadOptions::default()).unwrap();
         let scene = &loaded.scene;
@@ -429,7 +512,7 @@ mod tests {
         // cosine or isotropic VPLs the bound at x is an upper bound of the unoccluded contribution there.
         let floor = |px: f32, pz: f32| {
             let si = scene.geometry.intersect(&Ray::new(Vec3A::new(px, 1.0, pz), -Vec3A::Y)).unwrap();
-            Receiver { bsdf: sh.bsdf(&si).unwrap(), si, wo: Vec3A::new(0.0, 1.0, -1.0).normalize() }
+            Receiver::new(si, sh.bsdf(&si).unwrap(), Vec3A::new(0.0, 1.0, -1.0).normalize())
         };
         let mut rng = Rng::new(9);
         for (cx, cz, radius) in [(0.013, 0.021, 0.3), (-1.0, 1.2, 0.6), (1.5, -1.37, 0.1)] {

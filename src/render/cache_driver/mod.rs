@@ -40,7 +40,14 @@ pub fn render_with<A: Application>(
     let app = A::from_params(&p, scene)?;
     let term = app.per_pixel_term();
     let overrides = cache_sample_settings(scene, params, settings, term.is_some(), warnings);
-    let mut cs = CacheSettings::from_params(&p, &overrides, scene, A::NAME, settings.seed, settings.progress)?;
+    let mut cs = CacheSettings::from_params(
+        &p,
+        &overrides,
+        scene,
+        (A::NAME, A::PAPER_CACHES),
+        settings.seed,
+        settings.progress,
+    )?;
     if !A::DGS_GEOMETRY {
         cs.params.dgs.geometry = false;
     }

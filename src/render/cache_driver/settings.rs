@@ -24,8 +24,8 @@ pub const PARAMETERS: &[Parameter] = &[
     Parameter::new(
         "caches",
         "integer",
-        "120000 × pixels / (1920×1080)",
-        "total cache budget N_c (the paper's density)",
+        "B × pixels / (1920×1080)",
+        "total cache budget N_c; B is the paper's budget for the application at 1920×1080 (in its README section)",
     ),
     Parameter::new("ratio", "float", "0.15", "stage-2 share R of two-stage strategies"),
     Parameter::new(
@@ -52,8 +52,8 @@ pub const PARAMETERS: &[Parameter] = &[
     Parameter::new("seed", "integer", "`--seed`", "seed of placement and evaluation"),
 ];
 
-/// The paper's cache density: 120K caches at 1920×1080.
-pub const PAPER_CACHES_PER_PIXEL: f64 = 120_000.0 / (1920.0 * 1080.0);
+/// Pixels of the paper's images (1920×1080), to which `Application::PAPER_CACHES` refers.
+pub const PAPER_PIXELS: f64 = 1920.0 * 1080.0;
 
 /// Where the caches go: nowhere (the per-sample reference) or a strategy of the placement registry.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -128,17 +128,18 @@ pub struct CacheSettings {
 }
 
 impl CacheSettings {
-    /// Reads the parameters of [`PARAMETERS`] for `scene` (messages name `integrator`); `o` wins over them.
+    /// Reads the parameters of [`PARAMETERS`] for `scene` (messages name `integrator`, whose paper budget at
+    /// 1920×1080 is `paper_caches`); `o` wins over them.
     pub fn from_params(
         p: &IntegratorParams<'_>,
         o: &CacheOverrides,
         scene: &Scene,
-        integrator: &str,
+        (integrator, paper_caches): (&str, usize),
         seed: u64,
         progress: bool,
     ) -> Result<Self> {
         let [w, h] = scene.film.cropped_bounds().size();
-        let default_caches = ((w * h) as f64 * PAPER_CACHES_PER_PIXEL).round().max(1.0) as i64;
+        let default_caches = ((w * h) as f64 * paper_caches as f64 / PAPER_PIXELS).round().max(1.0) as i64;
         let bad = |name: &str, what: &str| Error::usage(format!("{}{integrator}: \"{name}\" {what}", p.at(name)));
         // Read even when overridden, so a written value counts as read (the override wins silently).
         let caches = p.int_or("caches", default_caches)?;
