@@ -256,7 +256,7 @@ fn table(rows: &[Row], sweep: &Sweep) -> String {
             let _ = writeln!(
                 t,
                 "\n{scene}, against the converged per-pixel image (`none`: the per-sample reference; `LABEL:N`: \
-                 the per-pixel baseline, N rays × 4 pixel samples; placements: seed 0)\n\n\
+                 the per-pixel baseline, N rays (or draws) per sample × 4 pixel samples; placements: seed 0)\n\n\
                  | render | caches | RMSE | HDR-FLIP | total s |\n|---|---|---|---|---|"
             );
             for r in measured {

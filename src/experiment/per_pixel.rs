@@ -97,9 +97,9 @@ pub(super) fn rows(
         let (rmse, flip) = measure(&img, reference)?;
         let against = measure(&img, conv)?;
         log(&format!(
-            "{name} {} {n} rays x {PIXEL_SAMPLES} spp: rmse {rmse:.5} flip {flip:.5}, against the \
+            "{name} {} {}={n} x {PIXEL_SAMPLES} spp: rmse {rmse:.5} flip {flip:.5}, against the \
              converged image rmse {:.5} flip {:.5} ({secs:.1} s)",
-            base.integrator, against.0, against.1
+            base.integrator, base.samples, against.0, against.1
         ));
         let times = StageTimes { render: secs, total: secs, ..Default::default() };
         let (scene, placement) = (name.to_string(), format!("{}:{n}", base.label));
