@@ -59,7 +59,6 @@ pub fn series(rows: &[Row], scene: &str) -> Vec<(String, Vec<Point>)> {
         };
         let mut keys: Vec<(usize, String)> =
             mine.iter().filter(same).map(|r| (r.caches, r.placement.clone())).collect();
-        keys.dedup();
         keys.sort();
         keys.dedup();
         for (caches, placement) in keys {

@@ -143,7 +143,13 @@ impl ImportanceCache {
         if self.draws > 0 { self.draws } else { self.enabled.iter().filter(|&&e| e).count() as u32 }
     }
 
-    /// The per-sample baselines: `technique_count` VPLs drawn uniformly or by flux, averaged.
+    /// The enabled techniques as the letters of the `distributions` parameter.
+    fn letters(&self) -> String {
+        (0..4).filter(|&t| self.enabled[t]).map(|t| LETTERS[t]).collect()
+    }
+
+    /// The per-sample baselines: [`ImportanceCache::baseline_draws`] VPLs drawn uniformly or by flux,
+    /// averaged.
     fn baseline(&self, cx: &Lit<'_>, x: &Receiver, rng: &mut Rng, rays: &mut RayCounters) -> Spectrum {
         let n = cx.vpls.len();
         let k = self.baseline_draws().max(1);
@@ -218,10 +224,17 @@ impl Application for ImportanceCache {
     fn from_params(p: &IntegratorParams<'_>, _: &Scene) -> Result<Self> {
         let bad = |name: &str, what: String| Error::usage(format!("{}{}: \"{name}\" {what}", p.at(name), Self::NAME));
         let vpls = p.int_or("vpls", 8192)?;
-        if !(1..=MAX_VPLS).contains(&vpls) {
+        if vpls < 1 {
             return Err(bad("vpls", format!("must be between 1 and {MAX_VPLS}, got {vpls}")));
         }
-        let need = Vpls::bytes_for(vpls as usize) as u64;
+        // What the VPLs alone would occupy (an upper bound: every one with its own BSDF).
+        let need = (vpls as u128 * Vpls::bytes_for(1) as u128).min(u64::MAX as u128) as u64;
+        if vpls > MAX_VPLS {
+            return Err(bad(
+                "vpls",
+                format!("must be between 1 and {MAX_VPLS}, got {vpls} (up to {} of VPLs)", gib(need)),
+            ));
+        }
         if let Some(avail) = crate::render::cache_driver::stats::available_memory_bytes()
             && need > avail
         {
@@ -315,13 +328,12 @@ impl Application for ImportanceCache {
     }
 
     fn settings(&self) -> Vec<(&'static str, serde_json::Value)> {
-        let letters: String = (0..4).filter(|&t| self.enabled[t]).map(|t| LETTERS[t]).collect();
         vec![
             ("vpls", self.vpls.into()),
             ("vpldepth", self.max_depth.into()),
             ("vplseed", self.vpl_seed.into()),
             ("clamp", serde_json::Number::from_f64(self.clamp as f64).map_or(serde_json::Value::Null, Into::into)),
-            ("distributions", letters.into()),
+            ("distributions", self.letters().into()),
             ("mis", if self.mis == Mis::Balance { "balance" } else { "alphamax" }.into()),
             ("sampling", self.sampling.name().into()),
             ("draws", self.baseline_draws().into()),
@@ -331,14 +343,13 @@ impl Application for ImportanceCache {
     /// Power sampling with the same VPLs and sub-pixel samples; its sample count is `draws` (VPLs per
     /// sample), so its pixels integrate the same footprint as the reference's.
     fn baseline(&self) -> Option<Baseline> {
-        let letters: String = (0..4).filter(|&t| self.enabled[t]).map(|t| LETTERS[t]).collect();
         let set = [
             ("sampling", "power".to_string()),
             ("vpls", self.vpls.to_string()),
             ("vpldepth", self.max_depth.to_string()),
             ("vplseed", self.vpl_seed.to_string()),
             ("clamp", self.clamp.to_string()),
-            ("distributions", letters),
+            ("distributions", self.letters()),
         ];
         Some(Baseline {
             label: "power",

@@ -158,7 +158,7 @@ pub struct Unoccluded {
 }
 
 impl Vpls {
-    /// No VPLs (a scene without lights), with the distance clamp `clamp`.
+    /// No VPLs (a scene without lights, or the start of [`Vpls::generate`]), with the distance clamp `clamp`.
     pub fn none(clamp: f32) -> Vpls {
         Vpls { list: Vec::new(), bsdfs: Vec::new(), paths: 0, clamp2: clamp * clamp, flux: Vec::new() }
     }
@@ -175,13 +175,8 @@ impl Vpls {
         clamp: f32,
         rng: &mut Rng,
     ) -> Vpls {
-        let mut v = Vpls {
-            list: Vec::with_capacity(count),
-            bsdfs: Vec::new(),
-            paths: 0,
-            clamp2: clamp * clamp,
-            flux: Vec::new(),
-        };
+        let mut v = Vpls::none(clamp);
+        v.list.reserve(count);
         let mut rho_u = [[0.0f32; 2]; 16];
         for (i, u) in rho_u.iter_mut().enumerate() {
             *u = [((i % 4) as f32 + 0.5) / 4.0, ((i / 4) as f32 + 0.5) / 4.0];
@@ -257,7 +252,7 @@ impl Vpls {
         let vpl = match *at {
             EmitterPoint::Surface(sp) => {
                 // A diffuse area light emits the same radiance toward every lit direction.
-                let two_sided = lights.emission(light, at, -sp.n) != Spectrum::ZERO;
+                let two_sided = lights.is_two_sided(light);
                 let le = lights.emission(light, at, sp.n);
                 let power = le * weight;
                 let sides = if two_sided { 2.0 } else { 1.0 };
@@ -280,7 +275,7 @@ impl Vpls {
                     power: Spectrum::ZERO,
                     emitter: Emitter::Isotropic,
                 };
-                if lights.is_delta_point(light) {
+                if lights.is_point(light) {
                     let i = lights.emission(light, at, Vec3A::Z);
                     Vpl { power: i * weight, ..base }
                 } else {

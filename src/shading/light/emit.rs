@@ -104,8 +104,16 @@ impl Lights<'_> {
     }
 
     /// Whether light `light` is a point light (it emits the same intensity in every direction).
-    pub fn is_delta_point(&self, light: usize) -> bool {
+    pub fn is_point(&self, light: usize) -> bool {
         matches!(self.entries[light].kind, Kind::Point(_))
+    }
+
+    /// Whether light `light` is an area light that emits from both sides.
+    pub fn is_two_sided(&self, light: usize) -> bool {
+        match self.entries[light].kind {
+            Kind::Triangle { area, .. } | Kind::Shape { area, .. } => self.emission[area as usize].two_sided,
+            _ => false,
+        }
     }
 
     /// Radius of the world's bounding sphere (distant and infinite lights' disks).
