@@ -14,6 +14,7 @@
 //! | 5 | [`shading`] | textures, materials, lights: what a surface does with light |
 //! | 6 | [`render`] | the per-pixel integrators and pixel loop, and `render::cache_driver`, the one generic driver of every cache-based integrator |
 //! | — | [`experiment`] | sweeps of placements × budgets × seeds against the per-sample reference |
+//! | — | [`golden`] | golden-image regression: a manifest of renders re-rendered and compared bit for bit |
 //! | — | [`sampling`] | random streams keyed by pixel, low-discrepancy sequences, warps, frames |
 //! | — | [`image`] | f32 RGB images; EXR, PFM and PNG in and out |
 //! | — | [`metrics`] | RMSE, relMSE, HDR-FLIP |
@@ -29,6 +30,7 @@ pub mod cli;
 pub mod error;
 pub mod experiment;
 pub mod gbuffer;
+pub mod golden;
 pub mod image;
 pub mod metrics;
 pub mod parse;

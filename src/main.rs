@@ -1,5 +1,6 @@
 //! The `cachert` command: parses flags, runs the library, prints the result. Every failure prints
-//! `error: file:line:col: …` (with the offending line and a caret when there is one) and exits with status 2.
+//! `error: file:line:col: …` (with the offending line and a caret when there is one) and exits with status 2;
+//! a check that ran and found failures (`golden check`) exits with status 1.
 
 use std::io::Write;
 use std::process::ExitCode;
@@ -9,7 +10,8 @@ use clap::Parser;
 fn main() -> ExitCode {
     let cli = cachert::cli::Cli::parse();
     match cachert::cli::run(&cli) {
-        Ok(out) => {
+        Ok(done) => {
+            let out = done.text;
             if !out.is_empty() {
                 // A closed pipe (`cachert compare … | head -1`) is not an error of ours.
                 let mut stdout = std::io::stdout().lock();
@@ -20,7 +22,7 @@ fn main() -> ExitCode {
                     return ExitCode::from(2);
                 }
             }
-            ExitCode::SUCCESS
+            if done.passed { ExitCode::SUCCESS } else { ExitCode::from(1) }
         }
         Err(e) => {
             eprintln!("error: {e}");

@@ -244,6 +244,7 @@ impl Application for IrradianceCache {
     ];
 
     const PAPER_CACHES: usize = 40_000;
+    const QUICK: &'static [(&'static str, &'static str)] = &[("gather", "16")];
 
     type Record = IrradianceRecord;
     type Prepared<'s> = Lit<'s>;

@@ -96,6 +96,11 @@ pub trait Application: Sync + Sized {
     /// ablations `vgc+dgs:diff` and `vgc+dgs:geom` fix their terms whatever this says.
     const DGS_GEOMETRY: bool = true;
 
+    /// Parameter settings (`--set` pairs) that make a small render (64×48, the default budget) take about a
+    /// second on two cores with the same estimator — fewer gather directions or light samples, never a
+    /// different method. The golden matrix and the stability tests render with them.
+    const QUICK: &'static [(&'static str, &'static str)] = &[];
+
     /// What one cache stores.
     type Record: Send + Sync;
 

@@ -21,12 +21,14 @@ pub struct Entry {
     pub about: &'static str,
     /// Its own parameters (`Application::PARAMETERS`).
     pub parameters: &'static [Parameter],
+    /// Settings for small, fast renders (`Application::QUICK`).
+    pub quick: &'static [(&'static str, &'static str)],
 }
 
 impl Entry {
     /// The entry of application `A`.
     pub const fn of<A: Application>() -> Self {
-        Entry { name: A::NAME, about: A::ABOUT, parameters: A::PARAMETERS }
+        Entry { name: A::NAME, about: A::ABOUT, parameters: A::PARAMETERS, quick: A::QUICK }
     }
 }
 

@@ -5,6 +5,7 @@ pub mod bench;
 pub mod cache_outputs;
 pub mod compare;
 pub mod experiment;
+pub mod golden;
 pub mod info;
 pub mod irc_peer;
 pub mod peer_chart;
@@ -32,16 +33,34 @@ pub enum Command {
     Bench(bench::BenchArgs),
     /// Sweep placements × budgets × seeds against the per-sample reference (RMSE, HDR-FLIP).
     Experiment(experiment::ExperimentArgs),
+    /// Golden-image regression: check, update or add goldens (a folder with a MANIFEST.json).
+    Golden(golden::GoldenArgs),
 }
 
-/// Runs a parsed command line; returns what to print on stdout.
-pub fn run(cli: &Cli) -> crate::Result<String> {
+/// What a command printed, and whether it succeeded (a failed `golden check` exits with status 1).
+#[derive(Debug)]
+pub struct Done {
+    /// Text for standard output.
+    pub text: String,
+    /// False for a check that found failures.
+    pub passed: bool,
+}
+
+impl From<String> for Done {
+    fn from(text: String) -> Self {
+        Done { text, passed: true }
+    }
+}
+
+/// Runs a parsed command line; returns what to print on stdout and whether it passed.
+pub fn run(cli: &Cli) -> crate::Result<Done> {
     match &cli.command {
-        Command::Render(a) => render::run(a),
-        Command::Info(a) => info::run(a),
-        Command::Compare(a) => compare::run(a),
-        Command::Bench(a) => bench::run(a),
-        Command::Experiment(a) => experiment::run(a),
+        Command::Render(a) => render::run(a).map(Done::from),
+        Command::Info(a) => info::run(a).map(Done::from),
+        Command::Compare(a) => compare::run(a).map(Done::from),
+        Command::Bench(a) => bench::run(a).map(Done::from),
+        Command::Experiment(a) => experiment::run(a).map(Done::from),
+        Command::Golden(a) => golden::run(a).map(|r| Done { text: r.text, passed: r.passed }),
     }
 }
 

@@ -217,6 +217,7 @@ impl Application for ImportanceCache {
     ];
     const DGS_GEOMETRY: bool = false;
     const PAPER_CACHES: usize = 25_000;
+    const QUICK: &'static [(&'static str, &'static str)] = &[("vpls", "1024")];
 
     type Record = ImportanceRecord;
     type Prepared<'s> = Lit<'s>;

@@ -1,0 +1,339 @@
+//! Rendering a golden entry and comparing it with its image: `check` (re-render and compare every entry)
+//! and `update` (re-render and rewrite entries, saying what moved), plus `add` for a user's own goldens.
+//!
+//! Depends on `scene`, `render`, `image` and `metrics`.
+
+use std::path::Path;
+use std::time::Instant;
+
+use crate::error::{Error, Result, Warnings};
+use crate::image::Image;
+use crate::metrics::{Metric, compare};
+use crate::render::cache_driver::{CacheOverrides, Placement};
+use crate::render::{RenderSettings, render};
+use crate::scene::{LoadOptions, load};
+
+use super::manifest::{Entry, Manifest, Recorded, Spec, file_name, resolve};
+use super::{FLIP_TOLERANCE, REL_RMSE_TOLERANCE, machine_kind, matches, matrix};
+
+/// A rendered spec.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// The image.
+    pub image: Image,
+    /// Wall seconds of loading and rendering.
+    pub secs: f64,
+    /// Every resolved setting (see [`Recorded::settings`]).
+    pub settings: serde_json::Map<String, serde_json::Value>,
+}
+
+/// Renders `spec` (scene paths relative to `dir`) as `cachert render` would, with `threads` workers
+/// (default: all cores; the image does not depend on it). Warnings are dropped: a golden checks images.
+pub fn render_spec(dir: &Path, spec: &Spec, threads: Option<usize>) -> Result<Rendered> {
+    let start = Instant::now();
+    let placement = spec.placement.as_deref().map(Placement::parse).transpose()?;
+    let loaded = load(&resolve(dir, &spec.scene), LoadOptions { resolution: spec.resolution, quick: false })?;
+    let settings = RenderSettings {
+        seed: spec.seed,
+        spp: spec.spp,
+        threads,
+        progress: false,
+        quick: false,
+        integrator: Some(spec.integrator.clone()),
+        set: spec.set.iter().map(|(k, v)| (k.clone(), v.clone())).collect(),
+        cache: CacheOverrides { placement, caches: spec.caches, subpixels: None },
+    };
+    let out = render(&loaded.scene, loaded.integrator.as_ref(), &settings, &mut Warnings::default())?;
+    let settings = match &out.cache {
+        Some(c) => c.settings.clone(),
+        None => [("spp".to_string(), serde_json::Value::from(out.spp))].into_iter().collect(),
+    };
+    Ok(Rendered { image: out.image, secs: start.elapsed().as_secs_f64(), settings })
+}
+
+/// How a re-render compares with its golden.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Verdict {
+    /// The same bits.
+    Identical,
+    /// Not the same bits, within the cross-machine tolerances (only on another machine kind).
+    Within,
+    /// Neither; the reason.
+    Failed(String),
+}
+
+impl Verdict {
+    /// Whether the entry passed.
+    pub fn passed(&self) -> bool {
+        !matches!(self, Verdict::Failed(_))
+    }
+}
+
+/// The result of checking one entry.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// The entry's name.
+    pub name: String,
+    /// Pass or fail.
+    pub verdict: Verdict,
+    /// RMSE against the golden, relative to the golden's mean (NaN when not compared).
+    pub rel_rmse: f64,
+    /// Mean HDR-FLIP against the golden (NaN when not compared).
+    pub flip: f64,
+    /// Seconds the re-render took.
+    pub secs: f64,
+}
+
+impl Outcome {
+    /// One line of the report: verdict, time, errors, name, and the reason of a failure.
+    pub fn line(&self) -> String {
+        let (tag, why) = match &self.verdict {
+            Verdict::Identical => ("PASS identical", String::new()),
+            Verdict::Within => ("PASS within   ", String::new()),
+            Verdict::Failed(r) => ("FAIL          ", format!(": {r}")),
+        };
+        format!(
+            "{tag} {:>7.2} s  rel.RMSE {:<9.3e} FLIP {:<9.3e} {}{why}",
+            self.secs, self.rel_rmse, self.flip, self.name
+        )
+    }
+}
+
+/// RMSE relative to the reference's mean over all channels, and mean HDR-FLIP.
+fn errors(test: &Image, golden: &Image) -> Result<(f64, f64)> {
+    let v = compare(test, golden, &[Metric::Rmse, Metric::Flip])?;
+    let m = golden.mean();
+    let mean = (m[0] + m[1] + m[2]) / 3.0;
+    Ok((v[0].1 / mean.abs().max(1e-12), v[1].1))
+}
+
+/// Compares a re-render with its golden. Bit-identical passes; otherwise a golden made on this machine
+/// kind fails, and one made on another passes within [`REL_RMSE_TOLERANCE`] and [`FLIP_TOLERANCE`].
+pub fn judge(test: &Image, golden: &Image, same_machine: bool) -> (Verdict, f64, f64) {
+    if (test.width, test.height) != (golden.width, golden.height) {
+        let why =
+            format!("the render is {}×{}, the golden {}×{}", test.width, test.height, golden.width, golden.height);
+        return (Verdict::Failed(why), f64::NAN, f64::NAN);
+    }
+    let same_bits = test.pixels.iter().zip(&golden.pixels).all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits));
+    if same_bits {
+        return (Verdict::Identical, 0.0, 0.0);
+    }
+    let (rel, flip) = match errors(test, golden) {
+        Ok(e) => e,
+        Err(e) => return (Verdict::Failed(e.to_string()), f64::NAN, f64::NAN),
+    };
+    let verdict = if same_machine {
+        Verdict::Failed("not bit-identical on the machine kind the golden was made on".into())
+    } else if !(rel <= REL_RMSE_TOLERANCE && flip <= FLIP_TOLERANCE) {
+        Verdict::Failed(format!(
+            "beyond the cross-machine tolerance (relative RMSE {REL_RMSE_TOLERANCE:e}, FLIP {FLIP_TOLERANCE})"
+        ))
+    } else {
+        Verdict::Within
+    };
+    (verdict, rel, flip)
+}
+
+/// The entries of `m` whose names match `filter`; an error when a filter matches none.
+fn select<'m>(m: &'m Manifest, filter: Option<&str>, dir: &Path) -> Result<Vec<&'m Entry>> {
+    let chosen: Vec<&Entry> = m.entries.iter().filter(|e| filter.is_none_or(|f| matches(&e.name, f))).collect();
+    if chosen.is_empty() {
+        return Err(Error::usage(match filter {
+            Some(f) => format!("no golden in {} matches \"{f}\"", dir.display()),
+            None => format!("{} lists no goldens", dir.join(super::MANIFEST).display()),
+        }));
+    }
+    Ok(chosen)
+}
+
+/// Re-renders every entry of `dir`'s manifest matching `filter` and compares it with its golden, calling
+/// `log` with each outcome as it comes. A render or read failure is a failed outcome, not an error; errors
+/// are for a missing or malformed manifest and a filter that matches nothing.
+pub fn check(
+    dir: &Path,
+    filter: Option<&str>,
+    threads: Option<usize>,
+    log: &mut dyn FnMut(&Outcome),
+) -> Result<Vec<Outcome>> {
+    let m = Manifest::read(dir, false)?;
+    let here = machine_kind();
+    let mut out = Vec::new();
+    for e in select(&m, filter, dir)? {
+        let golden = crate::image::read(&resolve(dir, &e.file));
+        let outcome = match (render_spec(dir, &e.spec, threads), golden) {
+            (Err(err), _) => failed(e, format!("cannot render: {err}"), 0.0),
+            (Ok(r), Err(err)) => failed(e, format!("cannot read the golden: {err}"), r.secs),
+            (Ok(r), Ok(g)) => {
+                let (verdict, rel_rmse, flip) = judge(&r.image, &g, e.recorded.machine == here);
+                Outcome { name: e.name.clone(), verdict, rel_rmse, flip, secs: r.secs }
+            }
+        };
+        log(&outcome);
+        out.push(outcome);
+    }
+    Ok(out)
+}
+
+fn failed(e: &Entry, why: String, secs: f64) -> Outcome {
+    Outcome { name: e.name.clone(), verdict: Verdict::Failed(why), rel_rmse: f64::NAN, flip: f64::NAN, secs }
+}
+
+/// Refuses under continuous integration: goldens move only by an explicit command on a developer's
+/// machine, never as a side effect of a CI run.
+fn refuse_under_ci(what: &str) -> Result<()> {
+    if std::env::var_os("CI").is_some() {
+        return Err(Error::usage(format!(
+            "golden {what} refuses to run when the environment variable CI is set: goldens are made only by an \
+             explicit command on a developer's machine, and the commit that moves one says why"
+        )));
+    }
+    Ok(())
+}
+
+/// The commit of the code in `dir`'s repository (`git describe --always --dirty`), or `unknown`.
+fn commit(dir: &Path) -> String {
+    std::process::Command::new("git")
+        .arg("-C")
+        .arg(dir)
+        .args(["describe", "--always", "--dirty", "--abbrev=12"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .and_then(|o| String::from_utf8(o.stdout).ok())
+        .map(|s| s.trim().to_string())
+        .filter(|s| !s.is_empty())
+        .unwrap_or_else(|| "unknown".to_string())
+}
+
+/// Renders `spec`, writes its image to `dir/file` and returns what to record.
+fn make(dir: &Path, file: &str, spec: &Spec, threads: Option<usize>, commit: &str) -> Result<(Recorded, Image)> {
+    let r = render_spec(dir, spec, threads)?;
+    if let Some((x, y, c, v)) = r.image.first_non_finite() {
+        return Err(Error::usage(format!("the render has a non-finite value {v} at pixel ({x}, {y}), channel {c}")));
+    }
+    crate::image::write(&r.image, &resolve(dir, file))?;
+    let recorded = Recorded {
+        commit: commit.to_string(),
+        machine: machine_kind(),
+        mean: r.image.mean(),
+        secs: r.secs,
+        settings: r.settings,
+    };
+    Ok((recorded, r.image))
+}
+
+/// Re-renders and rewrites the entries of `dir` matching `filter`, writing the manifest after each, and
+/// returns one line per entry saying what moved and by how much. With `matrix`, entries of the project's
+/// matrix ([`matrix::entries`]) missing from the manifest are added first (those matching `filter`).
+/// Refuses when the environment variable `CI` is set.
+pub fn update(
+    dir: &Path,
+    filter: Option<&str>,
+    with_matrix: bool,
+    threads: Option<usize>,
+    log: &mut dyn FnMut(&str),
+) -> Result<Vec<String>> {
+    refuse_under_ci("update")?;
+    let mut m = Manifest::read(dir, with_matrix)?;
+    if with_matrix {
+        for (name, spec) in matrix::entries() {
+            if m.get(&name).is_none() && filter.is_none_or(|f| matches(&name, f)) {
+                let recorded = Recorded {
+                    commit: String::new(),
+                    machine: String::new(),
+                    mean: [0.0; 3],
+                    secs: 0.0,
+                    settings: Default::default(),
+                };
+                m.entries.push(Entry { file: file_name(&name), name, spec, recorded });
+            }
+        }
+    }
+    std::fs::create_dir_all(dir).map_err(|e| Error::file(dir, format!("cannot create the golden folder: {e}")))?;
+    let names: Vec<String> = select(&m, filter, dir)?.iter().map(|e| e.name.clone()).collect();
+    let commit = commit(dir);
+    let mut lines = Vec::new();
+    for name in names {
+        let i = m.entries.iter().position(|e| e.name == name).expect("selected from this manifest");
+        let e = &m.entries[i];
+        let old = crate::image::read(&resolve(dir, &e.file)).ok();
+        let (recorded, image) = make(dir, &e.file, &e.spec, threads, &commit).map_err(|err| in_entry(&name, err))?;
+        let what = match old {
+            None => "new".to_string(),
+            Some(old) => match judge(&image, &old, false) {
+                (Verdict::Identical, ..) => "unchanged (identical)".to_string(),
+                (_, rel, flip) => format!(
+                    "moved: relative RMSE {rel:.3e}, FLIP {flip:.3e}, mean {:.6} → {:.6}",
+                    mean3(e.recorded.mean),
+                    mean3(recorded.mean)
+                ),
+            },
+        };
+        let line = format!("{name}: {what} ({:.2} s)", recorded.secs);
+        log(&line);
+        lines.push(line);
+        m.entries[i].recorded = recorded;
+        m.write(dir)?;
+    }
+    Ok(lines)
+}
+
+/// Adds a golden named `name` rendered from `spec` to `dir` (creating the folder and manifest), refusing a
+/// name already there and refusing under `CI`. Returns the entry.
+pub fn add(dir: &Path, name: &str, spec: Spec, threads: Option<usize>) -> Result<Entry> {
+    refuse_under_ci("add")?;
+    let mut m = Manifest::read(dir, true)?;
+    if name.is_empty() || m.get(name).is_some() {
+        return Err(Error::usage(format!(
+            "a golden named \"{name}\" is already in {} (use golden update to re-render it)",
+            dir.display()
+        )));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| Error::file(dir, format!("cannot create the golden folder: {e}")))?;
+    let file = file_name(name);
+    let (recorded, _) = make(dir, &file, &spec, threads, &commit(dir)).map_err(|err| in_entry(name, err))?;
+    let entry = Entry { name: name.to_string(), file, spec, recorded };
+    m.entries.push(entry.clone());
+    m.write(dir)?;
+    Ok(entry)
+}
+
+fn mean3(m: [f64; 3]) -> f64 {
+    (m[0] + m[1] + m[2]) / 3.0
+}
+
+/// Prefixes an error with the golden it happened in (location errors keep their location first).
+fn in_entry(name: &str, err: Error) -> Error {
+    match err {
+        Error::Usage(msg) => Error::usage(format!("golden \"{name}\": {msg}")),
+        other => other,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn image(v: f32) -> Image {
+        Image::from_pixels(4, 3, vec![[v, v, v]; 12]).unwrap()
+    }
+
+    #[test]
+    fn judging_asks_for_identical_bits_on_the_same_machine_and_tolerance_elsewhere() {
+        let g = image(1.0);
+        assert_eq!(judge(&g, &g, true).0, Verdict::Identical);
+        let mut near = g.clone();
+        near.pixels[0][0] = 1.0 + 1e-6;
+        assert!(matches!(judge(&near, &g, true).0, Verdict::Failed(_)));
+        let (v, rel, flip) = judge(&near, &g, false);
+        assert_eq!(v, Verdict::Within, "{rel} {flip}");
+        let (v, rel, _) = judge(&image(1.01), &g, false);
+        assert!(matches!(v, Verdict::Failed(_)) && (rel - 0.01).abs() < 1e-4, "{v:?} {rel}");
+        let small = Image::from_pixels(2, 2, vec![[1.0; 3]; 4]).unwrap();
+        assert!(matches!(judge(&small, &g, false).0, Verdict::Failed(ref r) if r.contains("4×3")));
+        let mut nan = g.clone();
+        nan.pixels[3][1] = f32::NAN;
+        assert!(!judge(&nan, &g, false).0.passed());
+    }
+}
