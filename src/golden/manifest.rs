@@ -167,7 +167,7 @@ mod tests {
             file: file.into(),
             spec: Spec {
                 scene: "s.pbrt".into(),
-                integrator: "cacheao".into(),
+                integrator: "someapp".into(),
                 placement: Some("im".into()),
                 caches: None,
                 resolution: Some([8, 6]),
@@ -206,7 +206,7 @@ mod tests {
 
     #[test]
     fn file_names_are_safe() {
-        assert_eq!(file_name("spheres.cacheao.vgc+dgs:diff"), "spheres.cacheao.vgc+dgs_diff.exr");
+        assert_eq!(file_name("spheres.someapp.vgc+dgs:diff"), "spheres.someapp.vgc+dgs_diff.exr");
         assert_eq!(file_name("a/b c"), "a_b_c.exr");
     }
 }

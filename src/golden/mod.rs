@@ -70,12 +70,12 @@ mod tests {
 
     #[test]
     fn filters_match_substrings_and_wildcards() {
-        assert!(matches("spheres.cacheao.vgc+dgs", ""));
-        assert!(matches("spheres.cacheao.vgc+dgs", "cacheao"));
-        assert!(!matches("spheres.cacheao.vgc+dgs", "room"));
-        assert!(matches("spheres.cacheao.vgc+dgs", "spheres.*.vgc*"));
-        assert!(matches("spheres.cacheao.vgc+dgs", "*dgs"));
-        assert!(!matches("spheres.cacheao.vgc+dgs", "*vgc"));
+        assert!(matches("spheres.someapp.vgc+dgs", ""));
+        assert!(matches("spheres.someapp.vgc+dgs", "someapp"));
+        assert!(!matches("spheres.someapp.vgc+dgs", "room"));
+        assert!(matches("spheres.someapp.vgc+dgs", "spheres.*.vgc*"));
+        assert!(matches("spheres.someapp.vgc+dgs", "*dgs"));
+        assert!(!matches("spheres.someapp.vgc+dgs", "*vgc"));
         assert!(matches("ab", "a*b"));
         assert!(!matches("ab", "ab*b"));
         assert!(matches("a.x.b.y.c", "a*b*c"));
