@@ -76,7 +76,9 @@ pub struct Outcome {
     pub name: String,
     /// Pass or fail.
     pub verdict: Verdict,
-    /// RMSE against the golden, relative to the golden's mean (NaN when not compared).
+    /// RMSE against the golden (NaN when not compared).
+    pub rmse: f64,
+    /// The same relative to the golden's mean.
     pub rel_rmse: f64,
     /// Mean HDR-FLIP against the golden (NaN when not compared).
     pub flip: f64,
@@ -93,36 +95,53 @@ impl Outcome {
             Verdict::Failed(r) => ("FAIL          ", format!(": {r}")),
         };
         format!(
-            "{tag} {:>7.2} s  rel.RMSE {:<9.3e} FLIP {:<9.3e} {}{why}",
-            self.secs, self.rel_rmse, self.flip, self.name
+            "{tag} {:>7.2} s  RMSE {:<9.3e} rel. {:<9.3e} FLIP {:<9.3e} {}{why}",
+            self.secs, self.rmse, self.rel_rmse, self.flip, self.name
         )
     }
 }
 
-/// RMSE relative to the reference's mean over all channels, and mean HDR-FLIP.
-fn errors(test: &Image, golden: &Image) -> Result<(f64, f64)> {
+/// RMSE, the same relative to the reference's mean over all channels, and mean HDR-FLIP.
+fn errors(test: &Image, golden: &Image) -> Result<Errors> {
     let v = compare(test, golden, &[Metric::Rmse, Metric::Flip])?;
     let m = golden.mean();
     let mean = (m[0] + m[1] + m[2]) / 3.0;
-    Ok((v[0].1 / mean.abs().max(1e-12), v[1].1))
+    Ok(Errors { rmse: v[0].1, rel_rmse: v[0].1 / mean.abs().max(1e-12), flip: v[1].1 })
+}
+
+/// Errors of a re-render against its golden.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Errors {
+    /// RMSE.
+    pub rmse: f64,
+    /// RMSE over the golden's mean.
+    pub rel_rmse: f64,
+    /// Mean HDR-FLIP.
+    pub flip: f64,
+}
+
+impl Errors {
+    const ZERO: Errors = Errors { rmse: 0.0, rel_rmse: 0.0, flip: 0.0 };
+    const NAN: Errors = Errors { rmse: f64::NAN, rel_rmse: f64::NAN, flip: f64::NAN };
 }
 
 /// Compares a re-render with its golden. Bit-identical passes; otherwise a golden made on this machine
 /// kind fails, and one made on another passes within [`REL_RMSE_TOLERANCE`] and [`FLIP_TOLERANCE`].
-pub fn judge(test: &Image, golden: &Image, same_machine: bool) -> (Verdict, f64, f64) {
+pub fn judge(test: &Image, golden: &Image, same_machine: bool) -> (Verdict, Errors) {
     if (test.width, test.height) != (golden.width, golden.height) {
         let why =
             format!("the render is {}×{}, the golden {}×{}", test.width, test.height, golden.width, golden.height);
-        return (Verdict::Failed(why), f64::NAN, f64::NAN);
+        return (Verdict::Failed(why), Errors::NAN);
     }
     let same_bits = test.pixels.iter().zip(&golden.pixels).all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits));
     if same_bits {
-        return (Verdict::Identical, 0.0, 0.0);
+        return (Verdict::Identical, Errors::ZERO);
     }
-    let (rel, flip) = match errors(test, golden) {
+    let e = match errors(test, golden) {
         Ok(e) => e,
-        Err(e) => return (Verdict::Failed(e.to_string()), f64::NAN, f64::NAN),
+        Err(err) => return (Verdict::Failed(err.to_string()), Errors::NAN),
     };
+    let (rel, flip) = (e.rel_rmse, e.flip);
     let verdict = if same_machine {
         Verdict::Failed("not bit-identical on the machine kind the golden was made on".into())
     } else if !(rel <= REL_RMSE_TOLERANCE && flip <= FLIP_TOLERANCE) {
@@ -132,7 +151,7 @@ pub fn judge(test: &Image, golden: &Image, same_machine: bool) -> (Verdict, f64,
     } else {
         Verdict::Within
     };
-    (verdict, rel, flip)
+    (verdict, e)
 }
 
 /// The entries of `m` whose names match `filter`; an error when a filter matches none.
@@ -165,8 +184,9 @@ pub fn check(
             (Err(err), _) => failed(e, format!("cannot render: {err}"), 0.0),
             (Ok(r), Err(err)) => failed(e, format!("cannot read the golden: {err}"), r.secs),
             (Ok(r), Ok(g)) => {
-                let (verdict, rel_rmse, flip) = judge(&r.image, &g, e.recorded.machine == here);
-                Outcome { name: e.name.clone(), verdict, rel_rmse, flip, secs: r.secs }
+                let (verdict, err) = judge(&r.image, &g, e.recorded.machine == here);
+                let Errors { rmse, rel_rmse, flip } = err;
+                Outcome { name: e.name.clone(), verdict, rmse, rel_rmse, flip, secs: r.secs }
             }
         };
         log(&outcome);
@@ -176,7 +196,8 @@ pub fn check(
 }
 
 fn failed(e: &Entry, why: String, secs: f64) -> Outcome {
-    Outcome { name: e.name.clone(), verdict: Verdict::Failed(why), rel_rmse: f64::NAN, flip: f64::NAN, secs }
+    let Errors { rmse, rel_rmse, flip } = Errors::NAN;
+    Outcome { name: e.name.clone(), verdict: Verdict::Failed(why), rmse, rel_rmse, flip, secs }
 }
 
 /// Refuses under continuous integration: goldens move only by an explicit command on a developer's
@@ -262,9 +283,9 @@ pub fn update(
         let what = match old {
             None => "new".to_string(),
             Some(old) => match judge(&image, &old, false) {
-                (Verdict::Identical, ..) => "unchanged (identical)".to_string(),
-                (_, rel, flip) => format!(
-                    "moved: relative RMSE {rel:.3e}, FLIP {flip:.3e}, mean {:.6} → {:.6}",
+                (Verdict::Identical, _) => "unchanged (identical)".to_string(),
+                (_, Errors { rmse, rel_rmse, flip }) => format!(
+                    "moved: RMSE {rmse:.3e} (relative {rel_rmse:.3e}), FLIP {flip:.3e}, mean {:.6} → {:.6}",
                     mean3(e.recorded.mean),
                     mean3(recorded.mean)
                 ),
@@ -326,10 +347,10 @@ mod tests {
         let mut near = g.clone();
         near.pixels[0][0] = 1.0 + 1e-6;
         assert!(matches!(judge(&near, &g, true).0, Verdict::Failed(_)));
-        let (v, rel, flip) = judge(&near, &g, false);
-        assert_eq!(v, Verdict::Within, "{rel} {flip}");
-        let (v, rel, _) = judge(&image(1.01), &g, false);
-        assert!(matches!(v, Verdict::Failed(_)) && (rel - 0.01).abs() < 1e-4, "{v:?} {rel}");
+        let (v, e) = judge(&near, &g, false);
+        assert_eq!(v, Verdict::Within, "{e:?}");
+        let (v, e) = judge(&image(1.01), &g, false);
+        assert!(matches!(v, Verdict::Failed(_)) && (e.rel_rmse - 0.01).abs() < 1e-4, "{v:?} {e:?}");
         let small = Image::from_pixels(2, 2, vec![[1.0; 3]; 4]).unwrap();
         assert!(matches!(judge(&small, &g, false).0, Verdict::Failed(ref r) if r.contains("4×3")));
         let mut nan = g.clone();

@@ -18,7 +18,7 @@ pub mod check;
 pub mod manifest;
 pub mod matrix;
 
-pub use check::{Outcome, Verdict, check, render_spec, update};
+pub use check::{Errors, Outcome, Verdict, check, render_spec, update};
 pub use manifest::{Entry, MANIFEST, Manifest, Recorded, Spec};
 
 /// Across machine kinds: largest RMSE against the golden, relative to the golden's mean.
