@@ -30,8 +30,8 @@ pub struct ExperimentArgs {
     #[arg(long, default_value_t = 3)]
     pub seeds: u64,
     /// Integrator parameter for every run (repeatable), e.g. --set maxdistance=0.6.
-    #[arg(long = "set", value_name = "KEY=VALUE")]
-    pub set: Vec<String>,
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = super::parse_key_value)]
+    pub set: Vec<(String, String)>,
     /// Output folder (reference images are kept there and reused).
     #[arg(long, default_value = "experiment-out")]
     pub out: PathBuf,
@@ -51,15 +51,7 @@ pub fn run(a: &ExperimentArgs) -> Result<String> {
         Some(list) => counts("--ao-samples", list)?.into_iter().map(|n| n.min(u32::MAX as usize) as u32).collect(),
         None => Vec::new(),
     };
-    let set = a
-        .set
-        .iter()
-        .map(|kv| {
-            kv.split_once('=')
-                .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
-                .ok_or_else(|| Error::usage(format!("--set {kv}: expected KEY=VALUE")))
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let set = a.set.clone();
     let placements = a.placements.split(',').map(|s| Placement::parse(s.trim())).collect::<Result<Vec<_>>>()?;
     let default = registry::APPLICATIONS.first().map_or("", |e| e.name);
     let sweep = Sweep {

@@ -79,8 +79,8 @@ pub struct AddArgs {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Integrator parameter (repeatable), KEY=VALUE.
-    #[arg(long = "set", value_name = "KEY=VALUE")]
-    pub set: Vec<String>,
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = super::parse_key_value)]
+    pub set: Vec<(String, String)>,
     /// Worker threads.
     #[arg(long)]
     pub nthreads: Option<usize>,
@@ -138,15 +138,7 @@ fn summary(outcomes: &[golden::Outcome]) -> Report {
 }
 
 fn add(a: &AddArgs) -> Result<Report> {
-    let set = a
-        .set
-        .iter()
-        .map(|kv| {
-            kv.split_once('=')
-                .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
-                .ok_or_else(|| Error::usage(format!("--set {kv}: expected KEY=VALUE")))
-        })
-        .collect::<Result<BTreeMap<_, _>>>()?;
+    let set: BTreeMap<String, String> = a.set.iter().cloned().collect();
     // The scene as the manifest will resolve it: relative to the golden folder.
     let scene = if a.scene.is_absolute() {
         a.scene.clone()

@@ -72,3 +72,11 @@ pub fn parse_resolution(s: &str) -> std::result::Result<[u32; 2], String> {
         _ => Err(format!("expected WxH with positive integers (e.g. 640x360), found \"{s}\"")),
     }
 }
+
+/// Parses a `--set KEY=VALUE` value (key and value trimmed; the key not empty), for clap.
+pub fn parse_key_value(s: &str) -> std::result::Result<(String, String), String> {
+    match s.split_once('=') {
+        Some((k, v)) if !k.trim().is_empty() => Ok((k.trim().to_string(), v.trim().to_string())),
+        _ => Err(format!("expected KEY=VALUE, found \"{s}\"")),
+    }
+}

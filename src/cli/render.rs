@@ -58,19 +58,12 @@ pub struct RenderArgs {
     #[arg(long)]
     pub stats: Option<PathBuf>,
     /// Set an integrator parameter, overriding the scene file (repeatable), e.g. --set nsamples=16.
-    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_key_value)]
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = super::parse_key_value)]
     pub set: Vec<(String, String)>,
 }
 
 fn parse_placement(s: &str) -> std::result::Result<Placement, String> {
     Placement::parse(s.trim()).map_err(|e| e.to_string())
-}
-
-fn parse_key_value(s: &str) -> std::result::Result<(String, String), String> {
-    match s.split_once('=') {
-        Some((k, v)) if !k.trim().is_empty() => Ok((k.trim().to_string(), v.trim().to_string())),
-        _ => Err(format!("expected KEY=VALUE, found \"{s}\"")),
-    }
 }
 
 /// Runs `cachert render`; returns the summary to print (empty with --quiet) and the warnings, already printed.
