@@ -2,7 +2,8 @@
 //! failure cases and ours — budgets of 1, 2, 10, exactly the valid pixels and above; a view of almost only
 //! sky; one flat plane (the DGS map is zero everywhere: uniform fallback); depths from 1e-3 to 1e5 units;
 //! the same scene in centimetres and in metres; geometry thinner than a pixel; coincident instanced
-//! surfaces; zero-area triangles; SD's minimum cluster sizes and VGC's σ_a over their ranges. Each render
+//! surfaces; zero-area triangles; SD's minimum cluster sizes and VGC's σ_a over their ranges; every generic
+//! parameter at and beyond its ends (an image, or an error naming the parameter). Each render
 //! is finite, places exactly the budget (or every valid pixel when the budget is larger) and stays within
 //! a bound of its own per-sample reference (`none`) stated per application in [`bounds`].
 //!
@@ -316,4 +317,60 @@ fn sd_minimum_cluster_sizes_and_vgc_angles_over_their_ranges() {
     let mut lines: Vec<String> = seen.iter().map(|(k, v)| format!("{k}: rel. RMSE {v:.4}")).collect();
     lines.sort();
     eprintln!("{}", lines.join("\n"));
+}
+
+#[test]
+fn extreme_generic_parameters_render_or_give_a_clear_error() {
+    // Every generic parameter at and beyond its ends, for every application with a one-stage and a two-stage
+    // placement: a finite image with the exact budget, or an error that names the parameter.
+    let text = base();
+    let cases: [(&str, &str, &str); 25] = [
+        ("ratio", "0", "ratio"),
+        ("ratio", "0.999", "ratio"),
+        ("ratio", "1", "ratio"),
+        ("sigma_a", "0.5", "σ_a"),
+        ("sigma_a", "179", "sigma_a"),
+        ("sigma_a", "360", "sigma_a"),
+        ("gamma", "0", "gamma"),
+        ("gamma", "1e6", "gamma"),
+        ("meters_per_unit", "1e-9", "meters_per_unit"),
+        ("meters_per_unit", "1e9", "meters_per_unit"),
+        ("lambda", "0", "lambda"),
+        ("lambda", "1e9", "lambda"),
+        ("N", "1", "N"),
+        ("N", "100000", "N"),
+        ("theta_max", "0", "theta_max"),
+        ("theta_max", "180", "theta_max"),
+        ("M", "1", "M"),
+        ("M", "1000", "M"),
+        ("subpixels", "1", "subpixels"),
+        ("sdminsize", "1", "sdminsize"),
+        ("sdminsize", "100000000", "sdminsize"),
+        ("jitter", "0", "jitter"),
+        ("jitter", "1", "jitter"),
+        ("jitter", "5", "jitter"),
+        ("angular", "spherical", "angular"),
+    ];
+    let (mut rendered, mut refused) = (0, Vec::new());
+    for app in APPLICATIONS {
+        for p in ["sd+as", "vgc", "vgc+dgs"] {
+            for (key, value, named) in cases {
+                let what = format!("{} {p} {key}={value}", app.name);
+                match run(&text, app, p, 60, &[(key, value)]) {
+                    Ok(out) => {
+                        assert!(out.image.first_non_finite().is_none(), "{what}: a non-finite pixel");
+                        assert_eq!(out.cache.unwrap().stats.total_caches, 60, "{what}");
+                        rendered += 1;
+                    }
+                    Err(e) => {
+                        let e = e.to_string();
+                        assert!(e.contains(named), "{what}: the error does not name {named}: {e}");
+                        refused.push(format!("{what}: {e}"));
+                    }
+                }
+            }
+        }
+    }
+    eprintln!("{rendered} rendered; refused:\n{}", refused.join("\n"));
+    assert!(rendered > refused.len(), "{rendered} rendered, {} refused", refused.len());
 }
