@@ -23,12 +23,20 @@ pub struct Entry {
     pub parameters: &'static [Parameter],
     /// Settings for small, fast renders (`Application::QUICK`).
     pub quick: &'static [(&'static str, &'static str)],
+    /// The paper's budget at 1920×1080 (`Application::PAPER_CACHES`).
+    pub paper_caches: usize,
 }
 
 impl Entry {
     /// The entry of application `A`.
     pub const fn of<A: Application>() -> Self {
-        Entry { name: A::NAME, about: A::ABOUT, parameters: A::PARAMETERS, quick: A::QUICK }
+        Entry {
+            name: A::NAME,
+            about: A::ABOUT,
+            parameters: A::PARAMETERS,
+            quick: A::QUICK,
+            paper_caches: A::PAPER_CACHES,
+        }
     }
 }
 

@@ -1,5 +1,7 @@
 //! `cachert experiment`: a placement sweep (scenes × budgets × placements × seeds) against the per-sample
-//! reference, written to CSV/JSON with a table of averages.
+//! reference, written to CSV/JSON with a table of averages — from flags, or from a TOML spec file
+//! (`cachert experiment SPEC.toml --out DIR`: resumable, locked, with `--emit-jobs` and `--collect` for
+//! running the renders elsewhere).
 
 use std::path::PathBuf;
 
@@ -11,8 +13,18 @@ use crate::render::cache_driver::Placement;
 /// Flags of `cachert experiment`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct ExperimentArgs {
+    /// A TOML spec of the sweep (scenes, applications, placements, budgets, parameter values, seeds);
+    /// without it the sweep comes from the flags below.
+    pub spec: Option<PathBuf>,
+    /// With a spec: write the renders still to do as shell command lines to FILE (for GNU parallel, a Slurm
+    /// array, …) instead of running them.
+    #[arg(long = "emit-jobs", value_name = "FILE", requires = "spec")]
+    pub emit_jobs: Option<PathBuf>,
+    /// With a spec: render nothing; measure the per-run files found in --out and write the results.
+    #[arg(long, requires = "spec", conflicts_with = "emit_jobs")]
+    pub collect: bool,
     /// Scene files (repeatable).
-    #[arg(long = "scene", required = true)]
+    #[arg(long = "scene", required_unless_present = "spec", conflicts_with = "spec")]
     pub scenes: Vec<PathBuf>,
     /// Film resolution WxH for every scene (e.g. 640x360).
     #[arg(long, value_parser = super::parse_resolution)]
@@ -46,6 +58,9 @@ pub struct ExperimentArgs {
 
 /// Runs the sweep and returns the table.
 pub fn run(a: &ExperimentArgs) -> Result<String> {
+    if let Some(path) = &a.spec {
+        return run_spec(a, path);
+    }
     let caches = counts("--caches", &a.caches)?;
     let baseline_samples = match &a.baseline_samples {
         Some(list) => counts("--ao-samples", list)?.into_iter().map(|n| n.min(u32::MAX as usize) as u32).collect(),
@@ -81,4 +96,30 @@ fn counts(flag: &str, list: &str) -> Result<Vec<usize>> {
                 .ok_or_else(|| Error::usage(format!("{flag}: \"{c}\" is not a positive count")))
         })
         .collect()
+}
+
+/// `cachert experiment SPEC.toml`: run (resuming), emit the jobs, or collect.
+fn run_spec(a: &ExperimentArgs, path: &std::path::Path) -> Result<String> {
+    let spec = crate::experiment::spec::read(path)?;
+    let jobs = crate::experiment::jobs::emit;
+    if let Some(file) = &a.emit_jobs {
+        let exe = std::env::current_exe().map(|p| p.display().to_string()).unwrap_or_else(|_| "cachert".to_string());
+        let n = jobs(&spec, &a.out, file, &exe)?;
+        return Ok(format!(
+            "wrote {n} jobs of {} to {}; run them (e.g. parallel -j 2 < {}), then: cachert experiment {} --out {} --collect",
+            spec.jobs.len(),
+            file.display(),
+            file.display(),
+            path.display(),
+            a.out.display()
+        ));
+    }
+    let mut log = |line: &str| eprintln!("{line}");
+    let (_, table) = if a.collect {
+        let _lock = crate::experiment::jobs::lock(&a.out)?;
+        crate::experiment::jobs::collect(&spec, &a.out, &mut log)?
+    } else {
+        crate::experiment::jobs::run(&spec, &a.out, a.nthreads, &mut log)?
+    };
+    Ok(format!("{table}\nresults: {}/results.csv, results.json, table.md", a.out.display()))
 }

@@ -68,6 +68,12 @@ fn parse_placement(s: &str) -> std::result::Result<Placement, String> {
 
 /// Runs `cachert render`; returns the summary to print (empty with --quiet) and the warnings, already printed.
 pub fn run(args: &RenderArgs) -> Result<String> {
+    execute(args, &mut print_warnings)
+}
+
+/// [`run`] with the warnings handed to `warn` instead of printed (an experiment keeps them in each run's
+/// log). The render is exactly the one the same command line makes.
+pub fn execute(args: &RenderArgs, warn: &mut dyn FnMut(&crate::error::Warnings)) -> Result<String> {
     let loaded = load(&args.scene, LoadOptions { quick: args.quick, resolution: args.resolution })?;
     let mut warnings = loaded.warnings.clone();
     let settings = RenderSettings {
@@ -84,7 +90,7 @@ pub fn run(args: &RenderArgs) -> Result<String> {
     let out = output_path(args, &loaded.scene.film.filename);
     crate::image::Format::from_path(&out)?;
     let result = render(&loaded.scene, loaded.integrator.as_ref(), &settings, &mut warnings);
-    print_warnings(&warnings);
+    warn(&warnings);
     let result = result?;
     // Check every requested output before writing any, so a failed run leaves nothing behind.
     let cache = result.cache.as_deref();

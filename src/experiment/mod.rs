@@ -22,7 +22,9 @@ use crate::render::{RenderSettings, render};
 use crate::scene::{LoadOptions, LoadedScene, load};
 
 pub mod chart;
+pub mod jobs;
 mod per_pixel;
+pub mod spec;
 
 /// One sweep.
 #[derive(Clone, Debug)]
@@ -77,17 +79,24 @@ pub struct Row {
 /// driver's placement parameters (σ_a, `sdminsize`, `ratio`, …) do not change the reference and are left out,
 /// so sweeps over them share one; `subpixels` and `seed` do and stay in.
 fn variant(set: &[(String, String)]) -> String {
-    let placement_only = |k: &str| {
-        k != "subpixels" && k != "seed" && crate::render::cache_driver::PARAMETERS.iter().any(|p| p.name == k)
-    };
     let set: Vec<&(String, String)> = set.iter().filter(|(k, _)| !placement_only(k)).collect();
     if set.is_empty() {
         return String::new();
     }
-    let text: String = set.iter().map(|(k, v)| format!("{k}={v};")).collect();
-    // FNV-1a: a short, stable tag.
+    tag(&set)
+}
+
+/// `-` and a short stable hash (FNV-1a) of `k=v` pairs, for file names.
+fn tag(pairs: &[&(String, String)]) -> String {
+    let text: String = pairs.iter().map(|(k, v)| format!("{k}={v};")).collect();
     let h = text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3));
     format!("-{:08x}", h as u32)
+}
+
+/// Whether a parameter only changes where caches go (σ_a, `sdminsize`, `ratio`, …), not the reference:
+/// the cache driver's generic parameters except `subpixels` and `seed`.
+fn placement_only(k: &str) -> bool {
+    k != "subpixels" && k != "seed" && crate::render::cache_driver::PARAMETERS.iter().any(|p| p.name == k)
 }
 
 fn name_of(p: &Path) -> String {

@@ -1,0 +1,504 @@
+//! Running a spec's jobs and collecting what they wrote. Each job is one `cachert render` run that writes
+//! `runs/<id>.exr` and `runs/<id>.json` (its `--stats` report), and its warnings or error to `runs/<id>.log`.
+//! The jobs run in this process ([`run`]: resumable, since a job whose `.json` exists is skipped; locked,
+//! so two sweeps never write one folder), or are written out as command lines for a scheduler such as GNU
+//! parallel or a Slurm array ([`emit`]); either way [`collect`] then measures every run against its
+//! reference and writes `results.csv`, `results.json`, `table.md` and one error-versus-time chart per scene
+//! and application. A failed run is a row with its message, not the end of the sweep.
+//!
+//! Depends on `cli::render` (the job *is* its command line), `image`, `metrics` and the chart writer.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+use clap::Parser;
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::image::Image;
+use crate::metrics::{Metric, compare};
+use crate::render::cache_driver::stats::{CacheStats, StageTimes};
+
+use super::spec::{Job, Spec};
+
+/// The folder of per-run files inside an experiment's output folder.
+pub const RUNS: &str = "runs";
+
+/// The lock file that keeps two sweeps from writing one folder.
+pub const LOCK: &str = ".cachert-experiment.lock";
+
+/// The arguments of `cachert` that render `job` into `out/runs/` (without the program name).
+pub fn argv(job: &Job, out: &Path) -> Vec<String> {
+    let runs = out.join(RUNS);
+    let mut a = vec![
+        "render".to_string(),
+        job.file.display().to_string(),
+        "--integrator".into(),
+        job.application.clone(),
+        "--placement".into(),
+        job.placement.clone(),
+        "--caches".into(),
+        job.caches.to_string(),
+        "--seed".into(),
+        job.seed.to_string(),
+        "--resolution".into(),
+        format!("{}x{}", job.resolution[0], job.resolution[1]),
+    ];
+    for (k, v) in &job.set {
+        a.push("--set".into());
+        a.push(format!("{k}={v}"));
+    }
+    a.push("--quiet".into());
+    a.push("--outfile".into());
+    a.push(runs.join(format!("{}.exr", job.id)).display().to_string());
+    a.push("--stats".into());
+    a.push(runs.join(format!("{}.json", job.id)).display().to_string());
+    a
+}
+
+/// `s` quoted for a POSIX shell when it needs it.
+fn quote(s: &str) -> String {
+    if !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || "-_./=+:,@%".contains(c)) {
+        s.to_string()
+    } else {
+        format!("'{}'", s.replace('\'', "'\\''"))
+    }
+}
+
+/// One shell command line running `job` with the program `exe`, its stderr going to `runs/<id>.log`.
+pub fn command_line(job: &Job, out: &Path, exe: &str) -> String {
+    let mut line = quote(exe);
+    for a in argv(job, out) {
+        line.push(' ');
+        line.push_str(&quote(&a));
+    }
+    let log = out.join(RUNS).join(format!("{}.log", job.id));
+    format!("{line} 2> {}", quote(&log.display().to_string()))
+}
+
+/// Whether `job` has finished: its statistics file exists (it is written last, atomically).
+pub fn done(job: &Job, out: &Path) -> bool {
+    out.join(RUNS).join(format!("{}.json", job.id)).is_file()
+}
+
+/// Holds an experiment folder's lock file; removes it when dropped.
+#[derive(Debug)]
+pub struct Lock(PathBuf);
+
+impl Drop for Lock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
+/// Takes `out`'s lock, or says who holds it.
+pub fn lock(out: &Path) -> Result<Lock> {
+    std::fs::create_dir_all(out.join(RUNS)).map_err(|e| Error::file(out, format!("cannot create: {e}")))?;
+    let path = out.join(LOCK);
+    match std::fs::OpenOptions::new().write(true).create_new(true).open(&path) {
+        Ok(mut f) => {
+            let _ = std::io::Write::write_all(&mut f, format!("{}\n", std::process::id()).as_bytes());
+            Ok(Lock(path))
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+            let holder = std::fs::read_to_string(&path).unwrap_or_default();
+            Err(Error::file(
+                &path,
+                format!(
+                    "another experiment is writing this folder (process {}); if none is, remove this file",
+                    holder.trim()
+                ),
+            ))
+        }
+        Err(e) => Err(Error::file(&path, format!("cannot create the lock file: {e}"))),
+    }
+}
+
+/// Writes every job of `spec` not yet done in `out` as a command line of `exe` to `path`, one per line;
+/// returns how many. The jobs are independent: a scheduler may run them in any order, on any machine that
+/// sees the same paths.
+pub fn emit(spec: &Spec, out: &Path, path: &Path, exe: &str) -> Result<usize> {
+    std::fs::create_dir_all(out.join(RUNS)).map_err(|e| Error::file(out, format!("cannot create: {e}")))?;
+    let lines: Vec<String> = spec.jobs.iter().filter(|j| !done(j, out)).map(|j| command_line(j, out, exe)).collect();
+    let text: String = lines.iter().map(|l| format!("{l}\n")).collect();
+    crate::image::write_bytes(path, text.as_bytes())?;
+    Ok(lines.len())
+}
+
+/// Runs `job` in this process exactly as its command line would, writing its warnings (or its error) to
+/// `runs/<id>.log`; returns the error message of a failed run.
+fn run_one(job: &Job, out: &Path, threads: Option<usize>) -> std::result::Result<(), String> {
+    let mut args = vec!["cachert".to_string()];
+    args.extend(argv(job, out));
+    if let Some(n) = threads {
+        args.push("--nthreads".into());
+        args.push(n.to_string());
+    }
+    let mut log = String::new();
+    let result = match crate::cli::Cli::try_parse_from(&args) {
+        Ok(crate::cli::Cli { command: crate::cli::Command::Render(a) }) => crate::cli::render::execute(&a, &mut |w| {
+            for w in w.iter() {
+                let _ = writeln!(log, "{w}");
+            }
+        })
+        .map(|_| ())
+        .map_err(|e| e.to_string()),
+        Ok(_) => Err("not a render command".to_string()),
+        Err(e) => Err(e.to_string()),
+    };
+    if let Err(e) = &result {
+        let _ = writeln!(log, "error: {e}");
+    }
+    let _ = std::fs::write(out.join(RUNS).join(format!("{}.log", job.id)), log);
+    result
+}
+
+/// Runs every job of `spec` not yet done in `out` (holding the folder's lock, with a progress bar over the
+/// whole sweep on a terminal), then [`collect`]s. `log` gets one line per job.
+pub fn run(
+    spec: &Spec,
+    out: &Path,
+    threads: Option<usize>,
+    log: &mut dyn FnMut(&str),
+) -> Result<(Vec<Record>, String)> {
+    let _lock = lock(out)?;
+    let todo: Vec<&Job> = spec.jobs.iter().filter(|j| !done(j, out)).collect();
+    log(&format!("{} jobs, {} done, {} to run", spec.jobs.len(), spec.jobs.len() - todo.len(), todo.len()));
+    let bar = if std::io::stderr().is_terminal() {
+        indicatif::ProgressBar::new(todo.len() as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("sweep [{bar:40}] {pos}/{len} {elapsed_precise} (eta {eta}) {msg}")
+    {
+        bar.set_style(style);
+    }
+    for job in todo {
+        bar.set_message(job.id.clone());
+        let start = std::time::Instant::now();
+        match run_one(job, out, threads) {
+            Ok(()) => log(&format!("{}: {:.1} s", job.id, start.elapsed().as_secs_f64())),
+            Err(e) => log(&format!("{}: failed: {e}", job.id)),
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    collect(spec, out, log)
+}
+
+/// One row of `results.csv`: a run, its settings, what it measured and cost.
+#[derive(Clone, Debug, Serialize)]
+pub struct Record {
+    /// The job id (its files are `runs/<id>.*`).
+    pub id: String,
+    /// `ok`, `failed` (with `error`) or `missing` (never run, or killed).
+    pub status: String,
+    /// Why it failed.
+    pub error: String,
+    /// Scene name.
+    pub scene: String,
+    /// Application.
+    pub application: String,
+    /// Placement.
+    pub placement: String,
+    /// Budget.
+    pub caches: usize,
+    /// Seed.
+    pub seed: u64,
+    /// Film resolution.
+    pub resolution: [u32; 2],
+    /// The varied parameters, `k=v;…`.
+    pub varied: String,
+    /// Every `--set` pair, `k=v;…`.
+    pub set: String,
+    /// RMSE against the reference.
+    pub rmse: f64,
+    /// Mean HDR-FLIP against the reference.
+    pub flip: f64,
+    /// Stage times in seconds, by the names of the `--stats` report (`total` included).
+    pub times: BTreeMap<String, f64>,
+    /// Stage-1 and stage-2 caches placed.
+    pub caches_placed: [u64; 2],
+    /// Rays traced while evaluating caches and while rendering.
+    pub rays: [u64; 2],
+    /// Peak resident memory of the process, when known.
+    pub peak_memory_bytes: Option<u64>,
+    /// Bytes of cache records.
+    pub record_bytes: u64,
+    /// VGC's σ_a in degrees, when VGC placed.
+    pub sigma_a_deg: Option<f64>,
+    /// Seconds of the reference render.
+    pub reference_s: f64,
+}
+
+fn read_json(path: &Path) -> Option<serde_json::Value> {
+    serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()
+}
+
+/// The error line of a failed job's log (its last `error:` line), if it has one.
+fn failure(out: &Path, job: &Job) -> Option<String> {
+    let text = std::fs::read_to_string(out.join(RUNS).join(format!("{}.log", job.id))).ok()?;
+    text.lines().rev().find_map(|l| l.strip_prefix("error: ").map(str::to_string))
+}
+
+/// A record of `job` with its settings and nothing measured yet.
+fn record(job: &Job, status: &str, error: String) -> Record {
+    Record {
+        id: job.id.clone(),
+        status: status.into(),
+        error,
+        scene: job.scene.clone(),
+        application: job.application.clone(),
+        placement: job.placement.clone(),
+        caches: job.caches,
+        seed: job.seed,
+        resolution: job.resolution,
+        varied: job.varied.clone(),
+        set: job.set.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(";"),
+        rmse: f64::NAN,
+        flip: f64::NAN,
+        times: BTreeMap::new(),
+        caches_placed: [0, 0],
+        rays: [0, 0],
+        peak_memory_bytes: None,
+        record_bytes: 0,
+        sigma_a_deg: None,
+        reference_s: f64::NAN,
+    }
+}
+
+/// Fills `r` from a run's `--stats` report.
+fn fill(r: &mut Record, stats: &serde_json::Value) {
+    let s = &stats["stats"];
+    if let Some(t) = s["times"].as_object() {
+        r.times = t.iter().filter_map(|(k, v)| Some((k.clone(), v.as_f64()?))).collect();
+    }
+    r.caches_placed = [s["stage1_caches"].as_u64().unwrap_or(0), s["stage2_caches"].as_u64().unwrap_or(0)];
+    r.rays = [s["cache_rays"]["total"].as_u64().unwrap_or(0), s["render_rays"]["total"].as_u64().unwrap_or(0)];
+    r.peak_memory_bytes = s["peak_memory_bytes"].as_u64();
+    r.record_bytes = s["record_bytes"].as_u64().unwrap_or(0);
+    r.sigma_a_deg = s["placement"]["sigma_a_deg"].as_f64();
+}
+
+/// Measures every run of `spec` found in `out` against its reference and writes `results.csv`,
+/// `results.json`, `table.md` and the charts; returns the records and the table. Runs that failed or are
+/// missing (or whose reference is) are rows with their status and message.
+pub fn collect(spec: &Spec, out: &Path, log: &mut dyn FnMut(&str)) -> Result<(Vec<Record>, String)> {
+    let runs = out.join(RUNS);
+    let mut references: BTreeMap<&str, std::result::Result<(Image, f64), String>> = BTreeMap::new();
+    for job in spec.jobs.iter().filter(|j| j.is_reference()) {
+        let got = match read_json(&runs.join(format!("{}.json", job.id))) {
+            Some(stats) => crate::image::read(&runs.join(format!("{}.exr", job.id)))
+                .map(|img| (img, stats["stats"]["times"]["total"].as_f64().unwrap_or(f64::NAN)))
+                .map_err(|e| e.to_string()),
+            None => Err(failure(out, job).unwrap_or_else(|| "not run".into())),
+        };
+        references.insert(job.id.as_str(), got);
+    }
+    let mut records = Vec::new();
+    for job in spec.jobs.iter().filter(|j| !j.is_reference()) {
+        let stats = read_json(&runs.join(format!("{}.json", job.id)));
+        let mut r = match (&stats, failure(out, job)) {
+            (Some(_), _) => record(job, "ok", String::new()),
+            (None, Some(e)) => record(job, "failed", e),
+            (None, None) => record(job, "missing", "not run (or interrupted)".into()),
+        };
+        if let Some(s) = &stats {
+            fill(&mut r, s);
+            match references.get(job.reference.as_str()) {
+                Some(Ok((reference, secs))) => {
+                    r.reference_s = *secs;
+                    let measured = crate::image::read(&runs.join(format!("{}.exr", job.id)))
+                        .and_then(|img| compare(&img, reference, &[Metric::Rmse, Metric::Flip]));
+                    match measured {
+                        Ok(m) => (r.rmse, r.flip) = (m[0].1, m[1].1),
+                        Err(e) => (r.status, r.error) = ("failed".into(), e.to_string()),
+                    }
+                }
+                Some(Err(e)) => (r.status, r.error) = ("failed".into(), format!("its reference: {e}")),
+                None => (r.status, r.error) = ("failed".into(), "no reference job".into()),
+            }
+        }
+        records.push(r);
+    }
+    let failed = records.iter().filter(|r| r.status != "ok").count();
+    log(&format!("collected {} runs ({} ok, {failed} failed or missing)", records.len(), records.len() - failed));
+    write_csv(&records, &out.join("results.csv"))?;
+    let json =
+        serde_json::to_string_pretty(&records).map_err(|e| Error::file(out, format!("cannot encode results: {e}")))?;
+    crate::image::write_bytes(&out.join("results.json"), json.as_bytes())?;
+    charts(&records, out)?;
+    let table = table(&records);
+    crate::image::write_bytes(&out.join("table.md"), table.as_bytes())?;
+    Ok((records, table))
+}
+
+/// A CSV field: quoted when it holds a comma, a quote or a line break.
+fn field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) { format!("\"{}\"", s.replace('"', "\"\"")) } else { s.to_string() }
+}
+
+fn write_csv(records: &[Record], path: &Path) -> Result<()> {
+    let steps: Vec<String> = records.iter().find(|r| !r.times.is_empty()).map_or_else(
+        || StageTimes::default().steps().iter().map(|(n, _)| n.replace([' ', '-'], "_")).collect(),
+        |r| r.times.keys().cloned().collect(),
+    );
+    let mut csv =
+        String::from("id,status,error,scene,application,placement,caches,seed,width,height,varied,set,rmse,flip,");
+    for s in &steps {
+        let _ = write!(csv, "{s}_s,");
+    }
+    csv.push_str("stage1,stage2,cache_rays,render_rays,peak_memory_bytes,record_bytes,sigma_a_deg,reference_s\n");
+    let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x}"));
+    for r in records {
+        let _ = write!(
+            csv,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{:.6},{:.6},",
+            field(&r.id),
+            r.status,
+            field(&r.error),
+            field(&r.scene),
+            r.application,
+            r.placement,
+            r.caches,
+            r.seed,
+            r.resolution[0],
+            r.resolution[1],
+            field(&r.varied),
+            field(&r.set),
+            r.rmse,
+            r.flip
+        );
+        for s in &steps {
+            let _ = write!(csv, "{},", opt(r.times.get(s).copied()));
+        }
+        let _ = writeln!(
+            csv,
+            "{},{},{},{},{},{},{},{}",
+            r.caches_placed[0],
+            r.caches_placed[1],
+            r.rays[0],
+            r.rays[1],
+            r.peak_memory_bytes.map_or(String::new(), |b| b.to_string()),
+            r.record_bytes,
+            opt(r.sigma_a_deg),
+            opt(Some(r.reference_s).filter(|s| s.is_finite()))
+        );
+    }
+    crate::image::write_bytes(path, csv.as_bytes())
+}
+
+/// The label of a record's method in charts and tables: its placement and varied parameters.
+fn method(r: &Record) -> String {
+    if r.varied.is_empty() { r.placement.clone() } else { format!("{} {}", r.placement, r.varied.replace(';', " ")) }
+}
+
+/// One error-versus-time chart per scene and application (mean over seeds, error bars of one sd).
+fn charts(records: &[Record], out: &Path) -> Result<()> {
+    let mut keys: Vec<(String, String)> =
+        records.iter().filter(|r| r.status == "ok").map(|r| (r.scene.clone(), r.application.clone())).collect();
+    keys.sort();
+    keys.dedup();
+    for (scene, app) in keys {
+        let label = format!("{scene}-{app}");
+        let rows: Vec<super::Row> = records
+            .iter()
+            .filter(|r| r.status == "ok" && r.scene == scene && r.application == app)
+            .map(|r| super::Row {
+                scene: label.clone(),
+                placement: method(r),
+                caches: r.caches,
+                seed: r.seed,
+                rmse: r.rmse,
+                flip: r.flip,
+                converged: None,
+                stats: CacheStats {
+                    times: StageTimes { total: r.times.get("total").copied().unwrap_or(0.0), ..Default::default() },
+                    ..Default::default()
+                },
+            })
+            .collect();
+        super::chart::write(&rows, &label, &out.join(format!("{label}-error-vs-time.svg")))?;
+    }
+    Ok(())
+}
+
+/// Markdown: per scene and application, each method and budget's RMSE and FLIP (mean ± sd over seeds),
+/// time, and failures.
+fn table(records: &[Record]) -> String {
+    // (scene, application) → (method, budget) → runs.
+    type Methods<'a> = BTreeMap<(String, usize), Vec<&'a Record>>;
+    let mut groups: BTreeMap<(String, String), Methods> = BTreeMap::new();
+    for r in records {
+        groups
+            .entry((r.scene.clone(), r.application.clone()))
+            .or_default()
+            .entry((method(r), r.caches))
+            .or_default()
+            .push(r);
+    }
+    let mut t = String::new();
+    for ((scene, app), methods) in groups {
+        let _ = writeln!(
+            t,
+            "\n## {scene}, {app}\n\n| method | caches | runs | RMSE (mean ± sd) | HDR-FLIP (mean ± sd) | total s | failed |\n|---|---|---|---|---|---|---|"
+        );
+        for ((m, caches), rs) in methods {
+            let ok: Vec<&&Record> = rs.iter().filter(|r| r.status == "ok").collect();
+            let stat = |f: &dyn Fn(&Record) -> f64| {
+                let v: Vec<f64> = ok.iter().map(|r| f(r)).collect();
+                let n = v.len() as f64;
+                let mean = v.iter().sum::<f64>() / n;
+                let sd = if v.len() > 1 {
+                    (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
+                } else {
+                    0.0
+                };
+                (mean, sd)
+            };
+            let failed = rs.len() - ok.len();
+            if ok.is_empty() {
+                let _ = writeln!(t, "| {m} | {caches} | 0 | — | — | — | {failed} |");
+                continue;
+            }
+            let (rm, rs_) = stat(&|r| r.rmse);
+            let (fm, fs) = stat(&|r| r.flip);
+            let (tm, _) = stat(&|r| r.times.get("total").copied().unwrap_or(f64::NAN));
+            let _ = writeln!(
+                t,
+                "| {m} | {caches} | {} | {rm:.5} ± {rs_:.5} | {fm:.5} ± {fs:.5} | {tm:.2} | {failed} |",
+                ok.len()
+            );
+        }
+    }
+    t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shell_quoting_keeps_plain_words_and_quotes_the_rest() {
+        assert_eq!(quote("vgc+dgs"), "vgc+dgs");
+        assert_eq!(quote("a b"), "'a b'");
+        assert_eq!(quote("it's"), "'it'\\''s'");
+        assert_eq!(quote(""), "''");
+        assert_eq!(field("a,b"), "\"a,b\"");
+        assert_eq!(field("say \"x\""), "\"say \"\"x\"\"\"");
+    }
+
+    #[test]
+    fn a_second_lock_is_refused_until_the_first_is_dropped() {
+        let dir = std::env::temp_dir().join(format!("cachert-lock-{}", std::process::id()));
+        let first = lock(&dir).unwrap();
+        let e = lock(&dir).unwrap_err().to_string();
+        assert!(e.contains(LOCK) && e.contains(&std::process::id().to_string()), "{e}");
+        drop(first);
+        drop(lock(&dir).unwrap());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,388 @@
+//! A sweep described in a TOML file (`cachert experiment SPEC.toml`): scenes × applications × placements ×
+//! cache budgets × parameter values × seeds at one resolution, expanded into independent [`Job`]s.
+//!
+//! ```toml
+//! resolution = [160, 90]
+//! seeds = 3
+//!
+//! [[scene]]
+//! file = "../../shared/scenes/mcguire-sibenik-geometry/sibenik.pbrt"   # relative to this file
+//! name = "sibenik"                                                      # optional
+//!
+//! [[application]]
+//! name = "cacheao"
+//! placements = ["im", "sd", "sd+as", "vgc", "vgc+dgs"]
+//! density = [0.5, 1, 2]          # × the paper's density for the application; or caches = [417, 833]
+//! set = { maxdistance = 0.5 }    # parameters of every run (and of the reference)
+//! vary = { sdminsize = [1, 10, 100] }   # swept: every combination, with every placement
+//! ```
+//!
+//! Depends on the application and placement registries (names, paper budgets) and on `toml`; it renders
+//! nothing.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::application::registry;
+use crate::error::{Error, Result, SourceLoc};
+use crate::render::cache_driver::Placement;
+use crate::render::cache_driver::settings::PAPER_PIXELS;
+
+/// A parameter value as written: a string, a number or a boolean (passed on as `--set KEY=VALUE`).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum Value {
+    /// `"cone"`.
+    Text(String),
+    /// `10`.
+    Int(i64),
+    /// `0.5`.
+    Float(f64),
+    /// `true`.
+    Bool(bool),
+}
+
+impl Value {
+    /// The value as `--set` takes it.
+    pub fn text(&self) -> String {
+        match self {
+            Value::Text(s) => s.clone(),
+            Value::Int(i) => i.to_string(),
+            Value::Float(f) => f.to_string(),
+            Value::Bool(b) => b.to_string(),
+        }
+    }
+}
+
+/// One `[[scene]]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneSpec {
+    file: String,
+    name: Option<String>,
+}
+
+/// One `[[application]]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AppSpec {
+    name: String,
+    placements: Vec<String>,
+    caches: Option<Vec<usize>>,
+    density: Option<Vec<f64>>,
+    #[serde(default)]
+    set: BTreeMap<String, Value>,
+    #[serde(default)]
+    vary: BTreeMap<String, Vec<Value>>,
+}
+
+/// The file as written.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct File {
+    resolution: [u32; 2],
+    #[serde(default = "one")]
+    seeds: u64,
+    scene: Vec<SceneSpec>,
+    application: Vec<AppSpec>,
+}
+
+fn one() -> u64 {
+    1
+}
+
+/// What one job renders: the arguments of one `cachert render` run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Job {
+    /// Unique, file-safe id: the stem of its files under `runs/`.
+    pub id: String,
+    /// Scene name (for tables and charts).
+    pub scene: String,
+    /// Scene file.
+    pub file: PathBuf,
+    /// The cache-based integrator.
+    pub application: String,
+    /// `none` for the reference job.
+    pub placement: String,
+    /// Budget (1 for the reference).
+    pub caches: usize,
+    /// Seed.
+    pub seed: u64,
+    /// Film resolution.
+    pub resolution: [u32; 2],
+    /// Every `--set` pair: the application's fixed ones, then the varied ones.
+    pub set: Vec<(String, String)>,
+    /// The varied pairs alone, `k=v;…` (empty without `vary`).
+    pub varied: String,
+    /// The id of the reference job this run is measured against (its own id for a reference).
+    pub reference: String,
+}
+
+impl Job {
+    /// Whether this is a reference job.
+    pub fn is_reference(&self) -> bool {
+        self.id == self.reference
+    }
+}
+
+/// A parsed spec: its jobs, references first.
+#[derive(Clone, Debug)]
+pub struct Spec {
+    /// The spec file.
+    pub path: PathBuf,
+    /// Every job: the references, then the runs in sweep order.
+    pub jobs: Vec<Job>,
+}
+
+/// Reads and expands a spec file. Errors carry the file and, for malformed TOML or a bad value, the line
+/// and column.
+pub fn read(path: &Path) -> Result<Spec> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::file(path, format!("cannot read: {e}")))?;
+    parse(&text, path)
+}
+
+/// The location of byte `offset` of `text` in `path`.
+fn at(path: &Path, text: &str, offset: usize) -> SourceLoc {
+    SourceLoc::from_offset(path.into(), text, offset)
+}
+
+/// Parses spec text (paths relative to `path`'s folder).
+pub fn parse(text: &str, path: &Path) -> Result<Spec> {
+    let file: File = toml::from_str(text).map_err(|e| {
+        let offset = e.span().map_or(0, |s| s.start);
+        Error::at(&at(path, text, offset), format!("experiment spec: {}", e.message()))
+    })?;
+    // Errors about a value: located at its first mention in the file.
+    let near = |needle: &str, msg: String| {
+        let offset = text.find(needle).unwrap_or(0);
+        Error::at(&at(path, text, offset), msg)
+    };
+    if file.resolution.contains(&0) {
+        return Err(near("resolution", "experiment spec: resolution must be two positive integers".into()));
+    }
+    if file.seeds == 0 {
+        return Err(near("seeds", "experiment spec: seeds must be at least 1".into()));
+    }
+    if file.scene.is_empty() || file.application.is_empty() {
+        return Err(near("", "experiment spec: needs at least one [[scene]] and one [[application]]".into()));
+    }
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let [w, h] = file.resolution;
+    let mut scenes = Vec::new();
+    for s in &file.scene {
+        let p = Path::new(&s.file);
+        let full = if p.is_absolute() { p.to_path_buf() } else { dir.join(p) };
+        let name = s.name.clone().unwrap_or_else(|| super::name_of(&full));
+        if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c)) {
+            return Err(near(
+                &s.file,
+                format!("experiment spec: scene name \"{name}\" must be letters, digits, - _ ."),
+            ));
+        }
+        if scenes.iter().any(|(n, _)| *n == name) {
+            return Err(near(&s.file, format!("experiment spec: two scenes are named \"{name}\" (set name = …)")));
+        }
+        scenes.push((name, full));
+    }
+    let mut refs = Vec::new();
+    let mut runs = Vec::new();
+    for a in &file.application {
+        let entry = registry::entry(&a.name).ok_or_else(|| {
+            near(
+                &a.name,
+                format!(
+                    "experiment spec: \"{}\" is not a cache-based integrator (one of: {})",
+                    a.name,
+                    registry::names()
+                ),
+            )
+        })?;
+        let placements = a
+            .placements
+            .iter()
+            .map(|p| match Placement::parse(p) {
+                Ok(Placement::Reference) => {
+                    Err(near(p, "experiment spec: \"none\" is the reference; every sweep has it".into()))
+                }
+                Ok(_) => Ok(p.clone()),
+                Err(e) => Err(near(p, format!("experiment spec: {e}"))),
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let budgets: Vec<usize> = match (&a.caches, &a.density) {
+            (Some(c), None) if !c.is_empty() && c.iter().all(|&n| n > 0) => c.clone(),
+            (None, Some(d)) if !d.is_empty() && d.iter().all(|&x| x > 0.0 && x.is_finite()) => d
+                .iter()
+                .map(|&x| {
+                    ((x * entry.paper_caches as f64 * (w as f64 * h as f64) / PAPER_PIXELS).round() as usize).max(1)
+                })
+                .collect(),
+            _ => {
+                return Err(near(
+                    &a.name,
+                    format!(
+                        "experiment spec: application \"{}\" needs either caches = [positive counts] or density = [positive factors]",
+                        a.name
+                    ),
+                ));
+            }
+        };
+        let fixed: Vec<(String, String)> = a.set.iter().map(|(k, v)| (k.clone(), v.text())).collect();
+        for (k, vs) in &a.vary {
+            if vs.is_empty() {
+                return Err(near(k, format!("experiment spec: vary.{k} lists no values")));
+            }
+            if a.set.contains_key(k) {
+                return Err(near(k, format!("experiment spec: {k} is both set and varied")));
+            }
+        }
+        let combos = combinations(&a.vary);
+        for (scene, file_path) in &scenes {
+            // The reference depends on the application and the parameters of every run that are not
+            // placement-only; a varied parameter that changes the reference gets one reference per value.
+            for combo in &combos {
+                let mut set = fixed.clone();
+                set.extend(combo.iter().cloned());
+                let ref_set: Vec<(String, String)> =
+                    set.iter().filter(|(k, _)| !super::placement_only(k)).cloned().collect();
+                let ref_id = format!("{scene}-{}-none{}", a.name, super::variant(&ref_set));
+                if !refs.iter().any(|j: &Job| j.id == ref_id) {
+                    refs.push(Job {
+                        id: ref_id.clone(),
+                        scene: scene.clone(),
+                        file: file_path.clone(),
+                        application: a.name.clone(),
+                        placement: Placement::REFERENCE.to_string(),
+                        caches: 1,
+                        seed: 0,
+                        resolution: file.resolution,
+                        set: ref_set,
+                        varied: String::new(),
+                        reference: ref_id.clone(),
+                    });
+                }
+                let varied: String = combo.iter().map(|(k, v)| format!("{k}={v};")).collect();
+                for &caches in &budgets {
+                    for p in &placements {
+                        for seed in 0..file.seeds {
+                            let tag = p.replace([':', '+'], "_");
+                            let vary_tag = if combo.is_empty() {
+                                String::new()
+                            } else {
+                                super::tag(&combo.iter().collect::<Vec<_>>())
+                            };
+                            let id = format!("{scene}-{}-{tag}-{caches}{vary_tag}-s{seed}", a.name);
+                            runs.push(Job {
+                                id,
+                                scene: scene.clone(),
+                                file: file_path.clone(),
+                                application: a.name.clone(),
+                                placement: p.clone(),
+                                caches,
+                                seed,
+                                resolution: file.resolution,
+                                set: set.clone(),
+                                varied: varied.trim_end_matches(';').to_string(),
+                                reference: ref_id.clone(),
+                            });
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let mut jobs = refs;
+    jobs.extend(runs);
+    let mut ids = std::collections::HashSet::new();
+    if let Some(dup) = jobs.iter().find(|j| !ids.insert(j.id.as_str())) {
+        return Err(Error::file(
+            path,
+            format!("experiment spec: two runs have the id \"{}\" (repeated values?)", dup.id),
+        ));
+    }
+    Ok(Spec { path: path.to_path_buf(), jobs })
+}
+
+/// Every combination of the varied values (one empty combination when nothing varies), keys in order.
+fn combinations(vary: &BTreeMap<String, Vec<Value>>) -> Vec<Vec<(String, String)>> {
+    let mut out: Vec<Vec<(String, String)>> = vec![Vec::new()];
+    for (k, vs) in vary {
+        out = out
+            .into_iter()
+            .flat_map(|c| {
+                vs.iter().map(move |v| {
+                    let mut c = c.clone();
+                    c.push((k.clone(), v.text()));
+                    c
+                })
+            })
+            .collect();
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn first_app() -> &'static str {
+        registry::APPLICATIONS[0].name
+    }
+
+    fn spec(body: &str) -> Result<Spec> {
+        let text = format!(
+            "resolution = [32, 24]\nseeds = 2\n[[scene]]\nfile = \"a/s.pbrt\"\n[[application]]\nname = \"{}\"\n{body}",
+            first_app()
+        );
+        parse(&text, Path::new("/x/spec.toml"))
+    }
+
+    #[test]
+    fn a_spec_expands_into_references_then_runs() {
+        let s = spec("placements = [\"im\", \"vgc+dgs\"]\ncaches = [10, 20]\nvary = { sdminsize = [1, 5] }\n").unwrap();
+        // Placement-only parameters share one reference.
+        let refs: Vec<&Job> = s.jobs.iter().filter(|j| j.is_reference()).collect();
+        assert_eq!(refs.len(), 1);
+        assert_eq!(s.jobs.len(), 1 + 2 * 2 * 2 * 2);
+        assert!(s.jobs[0].is_reference() && s.jobs[0].placement == "none");
+        assert_eq!(s.jobs[0].file, Path::new("/x/a/s.pbrt"));
+        let r = &s.jobs[1];
+        assert_eq!((r.caches, r.seed, r.varied.as_str()), (10, 0, "sdminsize=1"));
+        assert!(r.set.contains(&("sdminsize".into(), "1".into())));
+        assert_eq!(r.reference, s.jobs[0].id);
+    }
+
+    #[test]
+    fn a_varied_parameter_of_the_estimator_gets_its_own_reference() {
+        let s =
+            spec("placements = [\"im\"]\ncaches = [10]\nset = { subpixels = 2 }\nvary = { seed = [1, 2] }\n").unwrap();
+        assert_eq!(s.jobs.iter().filter(|j| j.is_reference()).count(), 2);
+    }
+
+    #[test]
+    fn density_scales_the_paper_budget_to_the_pixels() {
+        let s = spec("placements = [\"im\"]\ndensity = [1]\n").unwrap();
+        let paper = registry::APPLICATIONS[0].paper_caches as f64;
+        let expected = (paper * 32.0 * 24.0 / PAPER_PIXELS).round().max(1.0) as usize;
+        assert_eq!(s.jobs[1].caches, expected);
+    }
+
+    #[test]
+    fn bad_specs_name_the_line_and_what_was_expected() {
+        let e = spec("placements = [\"im\"]\ncaches = [10]\nfoo = 1\n").unwrap_err().to_string();
+        assert!(e.starts_with("/x/spec.toml:") && e.contains("foo"), "{e}");
+        let e = spec("placements = [\"im\", \"vgc+foo\"]\ncaches = [10]\n").unwrap_err().to_string();
+        assert!(e.starts_with("/x/spec.toml:7:") && e.contains("vgc+foo"), "{e}");
+        let e = spec("placements = [\"im\"]\n").unwrap_err().to_string();
+        assert!(e.contains("caches") && e.contains("density"), "{e}");
+        let e = spec("placements = [\"none\"]\ncaches = [1]\n").unwrap_err().to_string();
+        assert!(e.contains("reference"), "{e}");
+        let e = parse("resolution = [32, 24\n", Path::new("s.toml")).unwrap_err().to_string();
+        assert!(e.starts_with("s.toml:"), "{e}");
+        let e = spec("placements = [\"im\"]\ncaches = [10]\nset = { sdminsize = 1 }\nvary = { sdminsize = [2] }\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("both set and varied"), "{e}");
+    }
+}
