@@ -78,6 +78,12 @@ fn cache_ao_renders_match_the_recorded_checksums() {
     let mut got = Vec::new();
     for (placement, extra, _) in &cases {
         let mut set = vec![("placement", *placement), ("caches", "60")];
+        // The automatic σ_a follows the cache density since issue 14 (at 24×18 pixels 60 caches are 15°);
+        // the checksums were recorded when it followed the absolute count (25° for 60 caches), so VGC runs
+        // here with that σ_a written out.
+        if placement.starts_with("vgc") {
+            set.push(("sigma_a", "25"));
+        }
         set.extend_from_slice(extra);
         got.push(checksum(&set));
     }

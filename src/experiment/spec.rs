@@ -10,7 +10,7 @@
 //! name = "sibenik"                                                      # optional
 //!
 //! [[application]]
-//! name = "cacheao"
+//! name = "…"                   # a cache-based integrator of the application registry
 //! placements = ["im", "sd", "sd+as", "vgc", "vgc+dgs"]
 //! density = [0.5, 1, 2]          # × the paper's density for the application; or caches = [417, 833]
 //! set = { maxdistance = 0.5 }    # parameters of every run (and of the reference)

@@ -225,20 +225,26 @@ impl Default for PlacementParams {
     }
 }
 
+/// Pixels of the paper's images (1920×1080), to which its cache budgets refer.
+pub const PAPER_PIXELS: f64 = 1920.0 * 1080.0;
+
 impl PlacementParams {
     /// λ for a scene of diagonal `l`.
     pub fn lambda_for(&self, l: f32) -> f32 {
         self.lambda.unwrap_or(if l > 0.0 { 0.5 / l } else { 0.0 })
     }
 
-    /// σ_a in degrees for a total budget of `caches`: the given value, or the paper's 15° at 120K and 25° at
-    /// 25K/40K, interpolated linearly in log N_c and clamped to [15°, 25°] (ALGORITHMS.md A22).
-    pub fn sigma_a_for(&self, caches: usize) -> f32 {
+    /// σ_a in degrees for a total budget of `caches` over an image of `pixels` pixels: the given value, or the
+    /// paper's 15° at 120K and 25° at 25K/40K caches per 1920×1080 pixels, interpolated linearly in the log of
+    /// the 1080p-equivalent budget `caches × 1920·1080 / pixels` and clamped to [15°, 25°] (ALGORITHMS.md
+    /// A22): a 640×360 image at the paper's density gets the paper's σ_a.
+    pub fn sigma_a_for(&self, caches: usize, pixels: usize) -> f32 {
         if let Some(s) = self.sigma_a_deg {
             return s;
         }
-        let (n0, n1) = (40_000f32.ln(), 120_000f32.ln());
-        let t = ((caches.max(1) as f32).ln() - n0) / (n1 - n0);
+        let equivalent = caches.max(1) as f64 * PAPER_PIXELS / pixels.max(1) as f64;
+        let (n0, n1) = (40_000f64.ln(), 120_000f64.ln());
+        let t = ((equivalent.ln() - n0) / (n1 - n0)) as f32;
         (25.0 + t * (15.0 - 25.0)).clamp(15.0, 25.0)
     }
 }

@@ -34,7 +34,7 @@ const MAX_SIGMA_A: f32 = 360.0;
 /// | option | type | default | meaning |
 /// |---|---|---|---|
 /// | `two_stage` | bool | false | the budget is stage 1's share of a two-stage total: σ_a is chosen for N1/(1 − R) caches |
-/// | `PlacementParams::sigma_a_deg` | `Option<f32>` | 15° at 120K … 25° at 25K | σ_a, the angular threshold |
+/// | `PlacementParams::sigma_a_deg` | `Option<f32>` | 15° at 120K … 25° at 25K caches per 1920×1080 pixels | σ_a, the angular threshold |
 /// | `PlacementParams::gamma` | f32 | 0.2 | Γ of Eq. 1, per metre |
 /// | `PlacementParams::meters_per_unit` | f32 | 1 | scene units → metres for depths |
 /// | `PlacementParams::angular` | AngularMode | Cone | how normal spread is measured and split (A4) |
@@ -100,15 +100,15 @@ fn angular_count(pts: &[Pt], angular: &Angular) -> usize {
 }
 
 impl ViewGuided {
-    /// σ_a for this budget: the paper's rule applies to the total cache count.
-    fn sigma_a(&self, budget: usize, params: &PlacementParams) -> f32 {
+    /// σ_a for this budget over `pixels` pixels: the paper's rule applies to the total cache count.
+    fn sigma_a(&self, budget: usize, params: &PlacementParams, pixels: usize) -> f32 {
         let r = params.ratio;
         let total = if self.two_stage && r.is_finite() && (0.0..1.0).contains(&r) {
             (budget as f64 / (1.0 - r as f64)).round() as usize
         } else {
             budget
         };
-        params.sigma_a_for(total)
+        params.sigma_a_for(total, pixels)
     }
 }
 
@@ -120,7 +120,7 @@ impl InitialPlacement for ViewGuided {
             Prelude::Done(s) => return Ok(s),
             Prelude::Go(pts, notes) => (pts, notes),
         };
-        let mut sigma_a = self.sigma_a(budget, params);
+        let mut sigma_a = self.sigma_a(budget, params, g.width * g.height);
         if !(sigma_a.is_finite() && sigma_a >= 0.0) {
             return Err(Error::usage(format!("VGC: σ_a must be a non-negative angle in degrees, got {sigma_a}")));
         }
@@ -168,7 +168,7 @@ impl InitialPlacement for ViewGuided {
             }
             break search_log(SIGMA_S_MIN * l, l, count_hi, budget, count);
         };
-        let chosen = self.sigma_a(budget, params);
+        let chosen = self.sigma_a(budget, params, g.width * g.height);
         if sigma_a != chosen {
             notes.push(format!(
                 "VGC: the automatic σ_a = {chosen}° gives more clusters than the budget of {budget} on its own; \
@@ -297,8 +297,12 @@ mod tests {
     fn two_stage_sigma_a_uses_the_total_budget() {
         let p = PlacementParams::default();
         let n1 = (0.85f64 * 120_000.0).round() as usize;
-        assert_eq!(ViewGuided { two_stage: true }.sigma_a(n1, &p), 15.0);
-        assert!(ViewGuided { two_stage: false }.sigma_a(n1, &p) > 15.0);
+        let px = (1920 * 1080) as usize;
+        assert_eq!(ViewGuided { two_stage: true }.sigma_a(n1, &p, px), 15.0);
+        assert!(ViewGuided { two_stage: false }.sigma_a(n1, &p, px) > 15.0);
+        // The rule follows density: a ninth of the pixels at a ninth of the budget is the same σ_a.
+        assert!((ViewGuided { two_stage: true }.sigma_a(n1 / 9, &p, 640 * 360) - 15.0).abs() < 1e-3);
+        assert_eq!(p.sigma_a_for(40_000 / 9, 640 * 360), 25.0);
     }
 
     #[test]

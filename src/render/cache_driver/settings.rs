@@ -31,7 +31,7 @@ pub const PARAMETERS: &[Parameter] = &[
     Parameter::new(
         "sigma_a",
         "float",
-        "from the budget (25° at ≤40K … 15° at ≥120K)",
+        "from the cache density (25° at ≤40K … 15° at ≥120K caches per 1920×1080 pixels)",
         "VGC angular threshold, degrees",
     ),
     Parameter::new("gamma", "float", "0.2", "Γ: threshold growth with depth, per metre"),
@@ -53,7 +53,7 @@ pub const PARAMETERS: &[Parameter] = &[
 ];
 
 /// Pixels of the paper's images (1920×1080), to which `Application::PAPER_CACHES` refers.
-pub const PAPER_PIXELS: f64 = 1920.0 * 1080.0;
+pub use crate::placement::PAPER_PIXELS;
 
 /// Where the caches go: nowhere (the per-sample reference) or a strategy of the placement registry.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
