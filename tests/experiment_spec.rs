@@ -65,7 +65,8 @@ fn a_spec_sweep_runs_resumes_and_matches_its_emitted_jobs() {
     let r = first.iter().find(|r| r["application"] == "irradiancecache").unwrap();
     assert!(r["varied"].starts_with("sdminsize=") && r["set"].contains("gather=8"), "{r:?}");
     assert!(r["total_s"].parse::<f64>().unwrap() > 0.0 && r["stage1"].parse::<u64>().unwrap() > 0, "{r:?}");
-    for f in ["results.json", "table.md", "spheres-cacheao-error-vs-time.svg", "room-irradiancecache-error-vs-time.svg"]
+    for f in
+        ["results.json", "table.md", "spheres-cacheao-error-vs-time.svg", "room-irradiancecache-error-vs-caches.svg"]
     {
         assert!(out.join(f).is_file(), "{f}");
     }

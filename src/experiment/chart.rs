@@ -1,7 +1,9 @@
-//! The experiment's speed–accuracy chart (SVG, one per scene): RMSE and mean HDR-FLIP against the
-//! reference, over wall seconds on log–log axes, one line per placement through its cache budgets (means
-//! over seeds, error bars from the smallest to the largest seed) and one line for the per-pixel baseline
-//! through its sample counts. The method that reaches a given error first is the leftmost line there.
+//! The experiment's charts (SVG, one per scene), RMSE and mean HDR-FLIP against the reference on log–log
+//! axes, one line per placement through its cache budgets (means over seeds, error bars from the smallest
+//! to the largest seed):
+//! - over wall seconds ([`XAxis::Seconds`], the speed–accuracy chart), with one more line for the per-pixel
+//!   baseline through its sample counts: the method that reaches a given error first is the leftmost line;
+//! - over the number of caches ([`XAxis::Caches`], the paper's Fig. 7).
 //!
 //! Reads only the sweep's rows; draws with plotters' SVG backend. Depends on nothing else of the crate.
 
@@ -26,11 +28,22 @@ pub const PALETTE: [RGBColor; 10] = [
     RGBColor(40, 40, 160),
 ];
 
-/// One point of a series: mean seconds, and for each metric (mean, min, max) over seeds.
+/// What a chart's horizontal axis shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum XAxis {
+    /// Mean wall seconds of a run.
+    Seconds,
+    /// The cache budget (per-pixel baselines, which have none, are left out).
+    Caches,
+}
+
+/// One point of a series: mean seconds, budget, and for each metric (mean, min, max) over seeds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Point {
     /// Mean wall seconds.
     pub secs: f64,
+    /// Cache budget (0 for a per-pixel baseline).
+    pub caches: usize,
     /// RMSE mean, smallest, largest.
     pub rmse: (f64, f64, f64),
     /// HDR-FLIP mean, smallest, largest.
@@ -75,6 +88,7 @@ pub fn series(rows: &[Row], scene: &str) -> Vec<(String, Vec<Point>)> {
             };
             points.push(Point {
                 secs: sel.iter().map(|r| r.stats.times.total).sum::<f64>() / n,
+                caches,
                 rmse: stat(|r| r.rmse),
                 flip: stat(|r| r.flip),
             });
@@ -84,10 +98,26 @@ pub fn series(rows: &[Row], scene: &str) -> Vec<(String, Vec<Point>)> {
     out
 }
 
-/// Writes the chart of `scene`'s rows to `path`.
+/// Writes the speed–accuracy chart of `scene`'s rows to `path`.
 pub fn write(rows: &[Row], scene: &str, path: &Path) -> Result<()> {
+    write_over(rows, scene, path, XAxis::Seconds)
+}
+
+/// Writes the chart of `scene`'s rows over `x` to `path`.
+pub fn write_over(rows: &[Row], scene: &str, path: &Path, x: XAxis) -> Result<()> {
     let fail = |e: String| Error::file(path, format!("cannot draw the chart: {e}"));
-    let all = series(rows, scene);
+    let xof = move |p: &Point| match x {
+        XAxis::Seconds => p.secs,
+        XAxis::Caches => p.caches as f64,
+    };
+    let mut all = series(rows, scene);
+    if x == XAxis::Caches {
+        all.retain_mut(|(_, points)| {
+            points.retain(|p| p.caches > 0);
+            points.sort_by_key(|p| p.caches);
+            !points.is_empty()
+        });
+    }
     let pts: Vec<&Point> = all.iter().flat_map(|(_, p)| p).collect();
     if pts.is_empty() {
         return Ok(());
@@ -95,7 +125,11 @@ pub fn write(rows: &[Row], scene: &str, path: &Path) -> Result<()> {
     let root = SVGBackend::new(path, (1200, 500)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| fail(e.to_string()))?;
     let panels = root.split_evenly((1, 2));
-    let (t_lo, t_hi) = pts.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.secs), b.max(p.secs)));
+    let (t_lo, t_hi) = pts.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(xof(p)), b.max(xof(p))));
+    let x_desc = match x {
+        XAxis::Seconds => "wall seconds (log)",
+        XAxis::Caches => "caches (log)",
+    };
     type Metric = fn(&Point) -> (f64, f64, f64);
     let metrics: [(&str, Metric); 2] = [("RMSE", |p| p.rmse), ("HDR-FLIP", |p| p.flip)];
     for (panel, (title, metric)) in panels.iter().zip(metrics) {
@@ -110,13 +144,13 @@ pub fn write(rows: &[Row], scene: &str, path: &Path) -> Result<()> {
             .map_err(|e| fail(e.to_string()))?;
         chart
             .configure_mesh()
-            .x_desc("wall seconds (log)")
+            .x_desc(x_desc)
             .y_desc(format!("{title} (log)"))
             .draw()
             .map_err(|e| fail(e.to_string()))?;
         for (i, (name, points)) in all.iter().enumerate() {
             let colour = PALETTE[i % PALETTE.len()];
-            let line: Vec<(f64, f64)> = points.iter().map(|p| (p.secs, metric(p).0)).collect();
+            let line: Vec<(f64, f64)> = points.iter().map(|p| (xof(p), metric(p).0)).collect();
             chart
                 .draw_series(LineSeries::new(line.clone(), colour.stroke_width(2)))
                 .map_err(|e| fail(e.to_string()))?
@@ -127,7 +161,7 @@ pub fn write(rows: &[Row], scene: &str, path: &Path) -> Result<()> {
                 .map_err(|e| fail(e.to_string()))?;
             let bars = points.iter().filter(|p| metric(p).1 < metric(p).2).map(|p| {
                 let (_, a, b) = metric(p);
-                PathElement::new(vec![(p.secs, a.max(lo)), (p.secs, b)], colour.stroke_width(1))
+                PathElement::new(vec![(xof(p), a.max(lo)), (xof(p), b)], colour.stroke_width(1))
             });
             chart.draw_series(bars).map_err(|e| fail(e.to_string()))?;
         }
@@ -185,6 +219,10 @@ mod tests {
         write(&rows, "s", &path).unwrap();
         let svg = std::fs::read_to_string(&path).unwrap();
         assert!(svg.contains("<svg") && svg.contains("power") && svg.contains("vgc"));
+        // Over caches the baseline, which has no budget, is left out.
+        write_over(&rows, "s", &path, XAxis::Caches).unwrap();
+        let svg = std::fs::read_to_string(&path).unwrap();
+        assert!(svg.contains("caches (log)") && svg.contains("vgc") && !svg.contains("power"));
         std::fs::remove_dir_all(&dir).ok();
     }
 }

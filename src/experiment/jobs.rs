@@ -3,8 +3,8 @@
 //! The jobs run in this process ([`run`]: resumable, since a job whose `.json` exists is skipped; locked,
 //! so two sweeps never write one folder), or are written out as command lines for a scheduler such as GNU
 //! parallel or a Slurm array ([`emit`]); either way [`collect`] then measures every run against its
-//! reference and writes `results.csv`, `results.json`, `table.md` and one error-versus-time chart per scene
-//! and application. A failed run is a row with its message, not the end of the sweep.
+//! reference and writes `results.csv`, `results.json`, `table.md` and, per scene and application, charts of
+//! the error against time and against the number of caches. A failed run is a row with its message, not the end of the sweep.
 //!
 //! Depends on `cli::render` (the job *is* its command line), `image`, `metrics` and the chart writer.
 
@@ -396,7 +396,8 @@ fn method(r: &Record) -> String {
     if r.varied.is_empty() { r.placement.clone() } else { format!("{} {}", r.placement, r.varied.replace(';', " ")) }
 }
 
-/// One error-versus-time chart per scene and application (mean over seeds, error bars of one sd).
+/// Per scene and application, the error-versus-time and error-versus-caches charts (means over seeds, error
+/// bars from the smallest to the largest seed).
 fn charts(records: &[Record], out: &Path) -> Result<()> {
     let mut keys: Vec<(String, String)> =
         records.iter().filter(|r| r.status == "ok").map(|r| (r.scene.clone(), r.application.clone())).collect();
@@ -422,6 +423,8 @@ fn charts(records: &[Record], out: &Path) -> Result<()> {
             })
             .collect();
         super::chart::write(&rows, &label, &out.join(format!("{label}-error-vs-time.svg")))?;
+        let over_caches = out.join(format!("{label}-error-vs-caches.svg"));
+        super::chart::write_over(&rows, &label, &over_caches, super::chart::XAxis::Caches)?;
     }
     Ok(())
 }
