@@ -123,15 +123,22 @@ fn a_failed_run_is_a_row_with_its_message_and_the_sweep_goes_on() {
 }
 
 #[test]
-fn a_folder_another_sweep_holds_is_refused_and_bad_specs_name_their_line() {
+fn a_folder_another_sweep_holds_is_refused_a_stale_lock_is_taken_over_and_bad_specs_name_their_line() {
     let dir = TempDir::new("spec-lock");
     let spec = spec(&dir, "");
     let out = dir.path("out");
     std::fs::create_dir_all(&out).unwrap();
-    std::fs::write(out.join(".cachert-experiment.lock"), "12345\n").unwrap();
+    // Held by a running process (this test's own): refused.
+    let me = std::process::id().to_string();
+    std::fs::write(out.join(".cachert-experiment.lock"), format!("{me}\n")).unwrap();
     let (code, _, stderr) = cachert(&["experiment", spec.to_str().unwrap(), "--out", out.to_str().unwrap()]);
-    assert!(code == 2 && stderr.contains("another experiment") && stderr.contains("12345"), "{stderr}");
+    assert!(code == 2 && stderr.contains("another experiment") && stderr.contains(&me), "{stderr}");
     assert!(!out.join("results.csv").exists());
+    // Left by a sweep that was killed (its process is gone): taken over, and the sweep resumes.
+    std::fs::write(out.join(".cachert-experiment.lock"), "4000000000\n").unwrap();
+    let (code, _, stderr) = cachert(&["experiment", spec.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(code == 0 && out.join("results.csv").is_file(), "{stderr}");
+    assert!(!out.join(".cachert-experiment.lock").exists());
     let bad = dir.write("bad.toml", "resolution = [40, 30]\nseeds = 2\n[[scene]]\nfile = \"x.pbrt\"\nfiel = 1\n");
     let (code, _, stderr) = cachert(&["experiment", bad.to_str().unwrap(), "--out", out.to_str().unwrap()]);
     assert!(code == 2 && stderr.contains("bad.toml:5:") && stderr.contains("fiel"), "{stderr}");

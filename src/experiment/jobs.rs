@@ -93,26 +93,45 @@ impl Drop for Lock {
     }
 }
 
-/// Takes `out`'s lock, or says who holds it.
+/// Whether the lock file names a process that no longer runs (known only where `/proc` lists processes):
+/// a sweep that was killed leaves its lock behind, and resuming it must not be refused.
+fn stale(holder: &str) -> bool {
+    let proc = Path::new("/proc");
+    match holder.trim().parse::<u32>() {
+        Ok(pid) => proc.join("self").exists() && !proc.join(pid.to_string()).exists(),
+        Err(_) => false,
+    }
+}
+
+/// Takes `out`'s lock, or says who holds it. A lock left by a process that no longer runs (an interrupted
+/// sweep) is taken over.
 pub fn lock(out: &Path) -> Result<Lock> {
     std::fs::create_dir_all(out.join(RUNS)).map_err(|e| Error::file(out, format!("cannot create: {e}")))?;
     let path = out.join(LOCK);
-    match std::fs::OpenOptions::new().write(true).create_new(true).open(&path) {
-        Ok(mut f) => {
-            let _ = std::io::Write::write_all(&mut f, format!("{}\n", std::process::id()).as_bytes());
-            Ok(Lock(path))
+    let mut retried = false;
+    loop {
+        match std::fs::OpenOptions::new().write(true).create_new(true).open(&path) {
+            Ok(mut f) => {
+                let _ = std::io::Write::write_all(&mut f, format!("{}\n", std::process::id()).as_bytes());
+                return Ok(Lock(path));
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                let holder = std::fs::read_to_string(&path).unwrap_or_default();
+                if !retried && stale(&holder) {
+                    retried = true;
+                    let _ = std::fs::remove_file(&path);
+                    continue;
+                }
+                return Err(Error::file(
+                    &path,
+                    format!(
+                        "another experiment is writing this folder (process {}); if none is, remove this file",
+                        holder.trim()
+                    ),
+                ));
+            }
+            Err(e) => return Err(Error::file(&path, format!("cannot create the lock file: {e}"))),
         }
-        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-            let holder = std::fs::read_to_string(&path).unwrap_or_default();
-            Err(Error::file(
-                &path,
-                format!(
-                    "another experiment is writing this folder (process {}); if none is, remove this file",
-                    holder.trim()
-                ),
-            ))
-        }
-        Err(e) => Err(Error::file(&path, format!("cannot create the lock file: {e}"))),
     }
 }
 
@@ -502,6 +521,11 @@ mod tests {
         assert!(e.contains(LOCK) && e.contains(&std::process::id().to_string()), "{e}");
         drop(first);
         drop(lock(&dir).unwrap());
+        // A lock left by a process that no longer runs (beyond any pid_max) is taken over.
+        std::fs::write(dir.join(LOCK), "4000000000\n").unwrap();
+        let taken = lock(&dir).unwrap();
+        assert_eq!(std::fs::read_to_string(dir.join(LOCK)).unwrap().trim(), std::process::id().to_string());
+        drop(taken);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
