@@ -142,6 +142,17 @@ fn a_folder_another_sweep_holds_is_refused_a_stale_lock_is_taken_over_and_bad_sp
     let bad = dir.write("bad.toml", "resolution = [40, 30]\nseeds = 2\n[[scene]]\nfile = \"x.pbrt\"\nfiel = 1\n");
     let (code, _, stderr) = cachert(&["experiment", bad.to_str().unwrap(), "--out", out.to_str().unwrap()]);
     assert!(code == 2 && stderr.contains("bad.toml:5:") && stderr.contains("fiel"), "{stderr}");
-    let (code, _, stderr) = cachert(&["experiment", spec.to_str().unwrap(), "--scene", "x.pbrt"]);
-    assert!(code == 2 && stderr.contains("--scene"), "{stderr}");
+    // A flag the spec already answers is refused, not silently ignored.
+    for flag in [
+        &["--scene", "x.pbrt"][..],
+        &["--caches", "10"],
+        &["--seeds", "1"],
+        &["--set", "a=1"],
+        &["--resolution", "8x8"],
+    ] {
+        let mut args = vec!["experiment", spec.to_str().unwrap()];
+        args.extend_from_slice(flag);
+        let (code, _, stderr) = cachert(&args);
+        assert!(code == 2 && stderr.contains(flag[0]), "{flag:?}: {stderr}");
+    }
 }

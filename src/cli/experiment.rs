@@ -14,7 +14,8 @@ use crate::render::cache_driver::Placement;
 #[derive(clap::Args, Debug, Clone)]
 pub struct ExperimentArgs {
     /// A TOML spec of the sweep (scenes, applications, placements, budgets, parameter values, seeds);
-    /// without it the sweep comes from the flags below.
+    /// without it the sweep comes from the flags below. With it, only --out, --nthreads, --emit-jobs and
+    /// --collect apply (the others are refused: the spec says what they would).
     pub spec: Option<PathBuf>,
     /// With a spec: write the renders still to do as shell command lines to FILE (for GNU parallel, a Slurm
     /// array, …) instead of running them.
@@ -27,22 +28,22 @@ pub struct ExperimentArgs {
     #[arg(long = "scene", required_unless_present = "spec", conflicts_with = "spec")]
     pub scenes: Vec<PathBuf>,
     /// Film resolution WxH for every scene (e.g. 640x360).
-    #[arg(long, value_parser = super::parse_resolution)]
+    #[arg(long, value_parser = super::parse_resolution, conflicts_with = "spec")]
     pub resolution: Option<[u32; 2]>,
     /// The cache-based integrator (default: the first registered; see `cachert render --help`).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "spec")]
     pub integrator: Option<String>,
     /// Cache budgets, comma-separated.
-    #[arg(long, default_value = "13000")]
+    #[arg(long, default_value = "13000", conflicts_with = "spec")]
     pub caches: String,
     /// Placements, comma-separated.
-    #[arg(long, default_value = "im,sd,sd+as,vgc,vgc+dgs")]
+    #[arg(long, default_value = "im,sd,sd+as,vgc,vgc+dgs", conflicts_with = "spec")]
     pub placements: String,
     /// Number of seeds (0, 1, …) averaged per setting.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, conflicts_with = "spec")]
     pub seeds: u64,
     /// Integrator parameter for every run (repeatable), e.g. --set maxdistance=0.6.
-    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = super::parse_key_value)]
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = super::parse_key_value, conflicts_with = "spec")]
     pub set: Vec<(String, String)>,
     /// Output folder (reference images are kept there and reused).
     #[arg(long, default_value = "experiment-out")]
@@ -52,7 +53,7 @@ pub struct ExperimentArgs {
     pub nthreads: Option<usize>,
     /// Also time the integrator's per-pixel baseline (pbrt-v3's `ambientocclusion` for AO) at these ray
     /// counts (per pixel sample, comma-separated) against the same reference.
-    #[arg(long = "baseline-samples", visible_alias = "ao-samples")]
+    #[arg(long = "baseline-samples", visible_alias = "ao-samples", conflicts_with = "spec")]
     pub baseline_samples: Option<String>,
 }
 
