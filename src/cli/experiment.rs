@@ -102,10 +102,9 @@ fn counts(flag: &str, list: &str) -> Result<Vec<usize>> {
 /// `cachert experiment SPEC.toml`: run (resuming), emit the jobs, or collect.
 fn run_spec(a: &ExperimentArgs, path: &std::path::Path) -> Result<String> {
     let spec = crate::experiment::spec::read(path)?;
-    let jobs = crate::experiment::jobs::emit;
     if let Some(file) = &a.emit_jobs {
         let exe = std::env::current_exe().map(|p| p.display().to_string()).unwrap_or_else(|_| "cachert".to_string());
-        let n = jobs(&spec, &a.out, file, &exe)?;
+        let n = crate::experiment::jobs::emit(&spec, &a.out, file, &exe)?;
         return Ok(format!(
             "wrote {n} jobs of {} to {}; run them (e.g. parallel -j 2 < {}), then: cachert experiment {} --out {} --collect",
             spec.jobs.len(),

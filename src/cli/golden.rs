@@ -7,6 +7,8 @@ use std::path::PathBuf;
 use crate::error::{Error, Result};
 use crate::golden::{self, Spec};
 
+use super::Done;
+
 /// Flags of `cachert golden`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct GoldenArgs {
@@ -86,16 +88,8 @@ pub struct AddArgs {
     pub nthreads: Option<usize>,
 }
 
-/// What a golden command printed and whether it succeeded.
-pub struct Report {
-    /// The text for standard output.
-    pub text: String,
-    /// False when a check failed (exit status 1).
-    pub passed: bool,
-}
-
 /// Runs a `golden` action, printing progress lines to stderr.
-pub fn run(a: &GoldenArgs) -> Result<Report> {
+pub fn run(a: &GoldenArgs) -> Result<Done> {
     match &a.action {
         Action::Check(c) => {
             let outcomes = golden::check(&c.dir, c.filter.as_deref(), c.nthreads, &mut |o| eprintln!("{}", o.line()))?;
@@ -104,8 +98,8 @@ pub fn run(a: &GoldenArgs) -> Result<Report> {
         Action::Update { common: c, matrix } => {
             let lines = golden::update(&c.dir, c.filter.as_deref(), *matrix, c.nthreads, &mut |l| eprintln!("{l}"))?;
             let moved = lines.iter().filter(|l| l.contains(": moved") || l.contains(": new")).count();
-            Ok(Report {
-                text: format!("updated {} goldens in {} ({moved} new or moved)", lines.len(), a_dir(c)),
+            Ok(Done {
+                text: format!("updated {} goldens in {} ({moved} new or moved)", lines.len(), c.dir.display()),
                 passed: true,
             })
         }
@@ -113,12 +107,8 @@ pub fn run(a: &GoldenArgs) -> Result<Report> {
     }
 }
 
-fn a_dir(c: &Common) -> String {
-    c.dir.display().to_string()
-}
-
 /// The report's last lines: counts, and the failures by name.
-fn summary(outcomes: &[golden::Outcome]) -> Report {
+fn summary(outcomes: &[golden::Outcome]) -> Done {
     let failed: Vec<&golden::Outcome> = outcomes.iter().filter(|o| !o.verdict.passed()).collect();
     let identical = outcomes.iter().filter(|o| o.verdict == golden::Verdict::Identical).count();
     let secs: f64 = outcomes.iter().map(|o| o.secs).sum();
@@ -134,10 +124,10 @@ fn summary(outcomes: &[golden::Outcome]) -> Report {
             text.push_str(&format!("\n  {}", o.line()));
         }
     }
-    Report { text, passed: failed.is_empty() }
+    Done { text, passed: failed.is_empty() }
 }
 
-fn add(a: &AddArgs) -> Result<Report> {
+fn add(a: &AddArgs) -> Result<Done> {
     let set: BTreeMap<String, String> = a.set.iter().cloned().collect();
     // The scene as the manifest will resolve it: relative to the golden folder.
     let scene = if a.scene.is_absolute() {
@@ -163,7 +153,7 @@ fn add(a: &AddArgs) -> Result<Report> {
         set,
     };
     let e = golden::check::add(&a.dir, &name, spec, a.nthreads)?;
-    Ok(Report {
+    Ok(Done {
         text: format!("added golden \"{}\" ({}, {:.2} s) to {}", e.name, e.file, e.recorded.secs, a.dir.display()),
         passed: true,
     })

@@ -60,7 +60,7 @@ pub fn run(cli: &Cli) -> crate::Result<Done> {
         Command::Compare(a) => compare::run(a).map(Done::from),
         Command::Bench(a) => bench::run(a).map(Done::from),
         Command::Experiment(a) => experiment::run(a).map(Done::from),
-        Command::Golden(a) => golden::run(a).map(|r| Done { text: r.text, passed: r.passed }),
+        Command::Golden(a) => golden::run(a),
     }
 }
 
