@@ -65,12 +65,18 @@ fn a_spec_sweep_runs_resumes_and_matches_its_emitted_jobs() {
     let r = first.iter().find(|r| r["application"] == "irradiancecache").unwrap();
     assert!(r["varied"].starts_with("sdminsize=") && r["set"].contains("gather=8"), "{r:?}");
     assert!(r["total_s"].parse::<f64>().unwrap() > 0.0 && r["stage1"].parse::<u64>().unwrap() > 0, "{r:?}");
-    for f in
-        ["results.json", "table.md", "spheres-cacheao-error-vs-time.svg", "room-irradiancecache-error-vs-caches.svg"]
-    {
+    for f in [
+        "results.json",
+        "tables.md",
+        "report.html",
+        "spheres-cacheao-error-vs-time.svg",
+        "spheres-cacheao-error-vs-caches.png",
+    ] {
         assert!(out.join(f).is_file(), "{f}");
     }
-    assert!(stdout.contains("| vgc+dgs | 90 | 2 |"), "{stdout}");
+    assert!(stdout.contains("## Which method wins"), "{stdout}");
+    let tables = std::fs::read_to_string(out.join("tables.md")).unwrap();
+    assert!(tables.contains("| vgc+dgs | 90 | 2 |"), "{tables}");
 
     // Run again: nothing to do. Interrupted (one run's files gone): only it runs, to the same numbers.
     let (_, _, stderr) = cachert(&["experiment", s, "--out", o]);
@@ -118,8 +124,11 @@ fn a_failed_run_is_a_row_with_its_message_and_the_sweep_goes_on() {
         "{failed:?}"
     );
     assert_eq!(text.lines().filter(|l| l.contains(",ok,")).count(), 24);
-    let table = std::fs::read_to_string(out.join("table.md")).unwrap();
-    assert!(table.contains("## bad, cacheao") && table.contains("| im | 30 | 0 | — | — | — | 2 |"), "{table}");
+    let table = std::fs::read_to_string(out.join("tables.md")).unwrap();
+    assert!(
+        table.contains("## All runs: bad, cacheao") && table.contains("| im | 30 | 0 | — | — | — | — | 2 |"),
+        "{table}"
+    );
 }
 
 #[test]

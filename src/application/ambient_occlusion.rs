@@ -22,7 +22,7 @@ use crate::scene::Scene;
 use crate::scene::accel::OccluderHint;
 use crate::scene::ray::{Ray, RayCounters, offset_ray_origin};
 
-use super::{Application, Baseline, Neighbour};
+use super::{Application, Baseline, Neighbour, PerSample};
 
 /// A visibility cache: one bit per gathering direction and the AO value.
 #[derive(Clone, Debug, PartialEq)]
@@ -92,6 +92,9 @@ impl Application for CacheAo {
         Parameter::new("gather", "integer", "32", "gathering grid side: gather² rays per cache"),
         Parameter::new("maxdistance", "float", "0.1 · L", "occlusion ray length"),
     ];
+
+    /// gather² directions about the shading normal at every sub-pixel sample.
+    const PER_SAMPLE: Option<PerSample> = Some(PerSample { count: "gather", set: &[] });
 
     type Record = VisibilityRecord;
     type Prepared<'s> = &'s Scene;

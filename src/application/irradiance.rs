@@ -39,7 +39,7 @@ use crate::shading::bxdf::BxdfFlags;
 use crate::shading::light::LightSelect;
 use crate::shading::{Spectrum, luminance};
 
-use super::{Application, Neighbour, PerPixelTerm};
+use super::{Application, Neighbour, PerPixelTerm, PerSample};
 
 /// Samples of the fixed set that estimates ρ_hd of non-Lambertian lobes (an 8×8 stratified grid).
 const RHO_SIDE: usize = 8;
@@ -245,6 +245,8 @@ impl Application for IrradianceCache {
 
     const PAPER_CACHES: usize = 40_000;
     const QUICK: &'static [(&'static str, &'static str)] = &[("gather", "16")];
+    /// gather² paths at every sub-pixel sample.
+    const PER_SAMPLE: Option<PerSample> = Some(PerSample { count: "gather", set: &[] });
 
     type Record = IrradianceRecord;
     type Prepared<'s> = Lit<'s>;

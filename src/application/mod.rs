@@ -61,6 +61,18 @@ pub struct Baseline {
     pub scale: f32,
 }
 
+/// How to render the application's own estimator per pixel, with fewer samples than its reference: the
+/// placement `none` (every sub-pixel sample shaded by [`Application::reference`]) with these settings and
+/// `count` set to the sample count. The images estimate exactly the quantity of the reference and of the
+/// cache images, so an experiment can put this per-pixel integrator on the same error-versus-time axes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PerSample {
+    /// The parameter that sets the samples of one pixel sample (`gather`: gather² directions; `draws`).
+    pub count: &'static str,
+    /// Settings beside it that make the render per-pixel (e.g. a sampling mode without caches).
+    pub set: &'static [(&'static str, &'static str)],
+}
+
 /// A per-pixel integrator whose image is added to the cached one (irradiance caching's `output full`: the
 /// emitted and direct light that the caches, holding indirect light only, leave out). It renders with the
 /// scene's Sampler and PixelFilter, as it would on its own.
@@ -100,6 +112,10 @@ pub trait Application: Sync + Sized {
     /// second on two cores with the same estimator — fewer gather directions or light samples, never a
     /// different method. The golden matrix and the stability tests render with them.
     const QUICK: &'static [(&'static str, &'static str)] = &[];
+
+    /// The per-pixel form of the application's own estimator at a given sample count, if it has one
+    /// (experiments chart it beside the cache methods).
+    const PER_SAMPLE: Option<PerSample> = None;
 
     /// What one cache stores.
     type Record: Send + Sync;

@@ -7,10 +7,10 @@
 
 use crate::render::params::Parameter;
 
-use super::Application;
 use super::ambient_occlusion::CacheAo;
 use super::importance::ImportanceCache;
 use super::irradiance::IrradianceCache;
+use super::{Application, PerSample};
 
 /// What is known about a registered application without its type: name, summary, parameter table.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -25,6 +25,8 @@ pub struct Entry {
     pub quick: &'static [(&'static str, &'static str)],
     /// The paper's budget at 1920×1080 (`Application::PAPER_CACHES`).
     pub paper_caches: usize,
+    /// Its own estimator per pixel (`Application::PER_SAMPLE`).
+    pub per_sample: Option<PerSample>,
 }
 
 impl Entry {
@@ -36,6 +38,7 @@ impl Entry {
             parameters: A::PARAMETERS,
             quick: A::QUICK,
             paper_caches: A::PAPER_CACHES,
+            per_sample: A::PER_SAMPLE,
         }
     }
 }

@@ -121,5 +121,5 @@ fn run_spec(a: &ExperimentArgs, path: &std::path::Path) -> Result<String> {
     } else {
         crate::experiment::jobs::run(&spec, &a.out, a.nthreads, &mut log)?
     };
-    Ok(format!("{table}\nresults: {}/results.csv, results.json, table.md", a.out.display()))
+    Ok(format!("{table}\nresults: {}/results.csv, results.json, tables.md, report.html", a.out.display()))
 }

@@ -16,6 +16,7 @@ use crate::experiment::chart::PALETTE;
 /// Writes the chart of `rows` to `path`.
 pub fn write(rows: &[PeerRow], path: &Path) -> Result<()> {
     let fail = |e: String| Error::file(path, format!("cannot draw the chart: {e}"));
+    crate::experiment::chart::font()?;
     let root = SVGBackend::new(path, (1100, 480)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| fail(e.to_string()))?;
     let panels = root.split_evenly((1, 2));

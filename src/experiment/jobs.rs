@@ -19,12 +19,18 @@ use serde::Serialize;
 use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::metrics::{Metric, compare};
-use crate::render::cache_driver::stats::{CacheStats, StageTimes};
+use crate::render::cache_driver::stats::StageTimes;
 
 use super::spec::{Job, Spec};
 
 /// The folder of per-run files inside an experiment's output folder.
 pub const RUNS: &str = "runs";
+
+/// The Markdown tables of an experiment folder.
+pub const TABLES: &str = "tables.md";
+
+/// The suffix of a run's cache overlay (seed-0 cache runs write one): `runs/<id>-overlay.png`.
+pub const OVERLAY: &str = "-overlay.png";
 
 /// The lock file that keeps two sweeps from writing one folder.
 pub const LOCK: &str = ".cachert-experiment.lock";
@@ -51,6 +57,11 @@ pub fn argv(job: &Job, out: &Path) -> Vec<String> {
         a.push(format!("{k}={v}"));
     }
     a.push("--quiet".into());
+    if job.seed == 0 && job.placement != crate::render::cache_driver::Placement::REFERENCE {
+        // The report shows where the caches went in one run per method.
+        a.push("--overlay".into());
+        a.push(runs.join(format!("{}{OVERLAY}", job.id)).display().to_string());
+    }
     a.push("--outfile".into());
     a.push(runs.join(format!("{}.exr", job.id)).display().to_string());
     a.push("--stats".into());
@@ -221,9 +232,13 @@ pub struct Record {
     pub scene: String,
     /// Application.
     pub application: String,
-    /// Placement.
+    /// Placement (`none` for a per-pixel run).
     pub placement: String,
-    /// Budget.
+    /// The method's label in tables and charts (`Job::method`).
+    pub method: String,
+    /// The sample count of a per-pixel run.
+    pub samples: Option<u32>,
+    /// Budget (0 for a per-pixel run).
     pub caches: usize,
     /// Seed.
     pub seed: u64,
@@ -272,7 +287,9 @@ fn record(job: &Job, status: &str, error: String) -> Record {
         scene: job.scene.clone(),
         application: job.application.clone(),
         placement: job.placement.clone(),
-        caches: job.caches,
+        method: job.method(),
+        samples: job.samples,
+        caches: if job.samples.is_some() { 0 } else { job.caches },
         seed: job.seed,
         resolution: job.resolution,
         varied: job.varied.clone(),
@@ -303,7 +320,8 @@ fn fill(r: &mut Record, stats: &serde_json::Value) {
 }
 
 /// Measures every run of `spec` found in `out` against its reference and writes `results.csv`,
-/// `results.json`, `table.md` and the charts; returns the records and the table. Runs that failed or are
+/// `results.json`, `tables.md`, the charts and `report.html`; returns the records and the first table (which
+/// method wins where). Runs that failed or are
 /// missing (or whose reference is) are rows with their status and message.
 pub fn collect(spec: &Spec, out: &Path, log: &mut dyn FnMut(&str)) -> Result<(Vec<Record>, String)> {
     let runs = out.join(RUNS);
@@ -349,10 +367,20 @@ pub fn collect(spec: &Spec, out: &Path, log: &mut dyn FnMut(&str)) -> Result<(Ve
     let json =
         serde_json::to_string_pretty(&records).map_err(|e| Error::file(out, format!("cannot encode results: {e}")))?;
     crate::image::write_bytes(&out.join("results.json"), json.as_bytes())?;
-    charts(&records, out)?;
-    let table = table(&records);
-    crate::image::write_bytes(&out.join("table.md"), table.as_bytes())?;
-    Ok((records, table))
+    let figures = super::figures::write(&records, out)?;
+    let tables = super::tables::all(&records);
+    let markdown: String = tables.iter().map(|t| t.markdown()).collect();
+    crate::image::write_bytes(&out.join(TABLES), markdown.as_bytes())?;
+    let report = super::report::write(spec, &records, &tables, &figures, out)?;
+    log(&format!(
+        "wrote {}, {TABLES}, {} charts and {}",
+        out.join("results.csv").display(),
+        figures.len(),
+        report.display()
+    ));
+    // What the command prints: the claims table, the one to read first.
+    let summary = tables.first().map_or_else(String::new, |t| t.markdown());
+    Ok((records, summary))
 }
 
 /// A CSV field: quoted when it holds a comma, a quote or a line break.
@@ -365,8 +393,9 @@ fn write_csv(records: &[Record], path: &Path) -> Result<()> {
         || StageTimes::default().steps().iter().map(|(n, _)| n.replace([' ', '-'], "_")).collect(),
         |r| r.times.keys().cloned().collect(),
     );
-    let mut csv =
-        String::from("id,status,error,scene,application,placement,caches,seed,width,height,varied,set,rmse,flip,");
+    let mut csv = String::from(
+        "id,status,error,scene,application,placement,method,samples,caches,seed,width,height,varied,set,rmse,flip,",
+    );
     for s in &steps {
         let _ = write!(csv, "{s}_s,");
     }
@@ -375,13 +404,15 @@ fn write_csv(records: &[Record], path: &Path) -> Result<()> {
     for r in records {
         let _ = write!(
             csv,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{:.6},{:.6},",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.6},{:.6},",
             field(&r.id),
             r.status,
             field(&r.error),
             field(&r.scene),
             r.application,
             r.placement,
+            field(&r.method),
+            r.samples.map_or(String::new(), |n| n.to_string()),
             r.caches,
             r.seed,
             r.resolution[0],
@@ -408,95 +439,6 @@ fn write_csv(records: &[Record], path: &Path) -> Result<()> {
         );
     }
     crate::image::write_bytes(path, csv.as_bytes())
-}
-
-/// The label of a record's method in charts and tables: its placement and varied parameters.
-fn method(r: &Record) -> String {
-    if r.varied.is_empty() { r.placement.clone() } else { format!("{} {}", r.placement, r.varied.replace(';', " ")) }
-}
-
-/// Per scene and application, the error-versus-time and error-versus-caches charts (means over seeds, error
-/// bars from the smallest to the largest seed).
-fn charts(records: &[Record], out: &Path) -> Result<()> {
-    let mut keys: Vec<(String, String)> =
-        records.iter().filter(|r| r.status == "ok").map(|r| (r.scene.clone(), r.application.clone())).collect();
-    keys.sort();
-    keys.dedup();
-    for (scene, app) in keys {
-        let label = format!("{scene}-{app}");
-        let rows: Vec<super::Row> = records
-            .iter()
-            .filter(|r| r.status == "ok" && r.scene == scene && r.application == app)
-            .map(|r| super::Row {
-                scene: label.clone(),
-                placement: method(r),
-                caches: r.caches,
-                seed: r.seed,
-                rmse: r.rmse,
-                flip: r.flip,
-                converged: None,
-                stats: CacheStats {
-                    times: StageTimes { total: r.times.get("total").copied().unwrap_or(0.0), ..Default::default() },
-                    ..Default::default()
-                },
-            })
-            .collect();
-        super::chart::write(&rows, &label, &out.join(format!("{label}-error-vs-time.svg")))?;
-        let over_caches = out.join(format!("{label}-error-vs-caches.svg"));
-        super::chart::write_over(&rows, &label, &over_caches, super::chart::XAxis::Caches)?;
-    }
-    Ok(())
-}
-
-/// Markdown: per scene and application, each method and budget's RMSE and FLIP (mean ± sd over seeds),
-/// time, and failures.
-fn table(records: &[Record]) -> String {
-    // (scene, application) → (method, budget) → runs.
-    type Methods<'a> = BTreeMap<(String, usize), Vec<&'a Record>>;
-    let mut groups: BTreeMap<(String, String), Methods> = BTreeMap::new();
-    for r in records {
-        groups
-            .entry((r.scene.clone(), r.application.clone()))
-            .or_default()
-            .entry((method(r), r.caches))
-            .or_default()
-            .push(r);
-    }
-    let mut t = String::new();
-    for ((scene, app), methods) in groups {
-        let _ = writeln!(
-            t,
-            "\n## {scene}, {app}\n\n| method | caches | runs | RMSE (mean ± sd) | HDR-FLIP (mean ± sd) | total s | failed |\n|---|---|---|---|---|---|---|"
-        );
-        for ((m, caches), rs) in methods {
-            let ok: Vec<&&Record> = rs.iter().filter(|r| r.status == "ok").collect();
-            let stat = |f: &dyn Fn(&Record) -> f64| {
-                let v: Vec<f64> = ok.iter().map(|r| f(r)).collect();
-                let n = v.len() as f64;
-                let mean = v.iter().sum::<f64>() / n;
-                let sd = if v.len() > 1 {
-                    (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
-                } else {
-                    0.0
-                };
-                (mean, sd)
-            };
-            let failed = rs.len() - ok.len();
-            if ok.is_empty() {
-                let _ = writeln!(t, "| {m} | {caches} | 0 | — | — | — | {failed} |");
-                continue;
-            }
-            let (rm, rs_) = stat(&|r| r.rmse);
-            let (fm, fs) = stat(&|r| r.flip);
-            let (tm, _) = stat(&|r| r.times.get("total").copied().unwrap_or(f64::NAN));
-            let _ = writeln!(
-                t,
-                "| {m} | {caches} | {} | {rm:.5} ± {rs_:.5} | {fm:.5} ± {fs:.5} | {tm:.2} | {failed} |",
-                ok.len()
-            );
-        }
-    }
-    t
 }
 
 #[cfg(test)]

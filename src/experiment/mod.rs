@@ -22,9 +22,13 @@ use crate::render::{RenderSettings, render};
 use crate::scene::{LoadOptions, LoadedScene, load};
 
 pub mod chart;
+pub mod figures;
 pub mod jobs;
 mod per_pixel;
+pub mod report;
 pub mod spec;
+pub mod summary;
+pub mod tables;
 
 /// One sweep.
 #[derive(Clone, Debug)]

@@ -15,6 +15,8 @@
 //! density = [0.5, 1, 2]          # × the paper's density for the application; or caches = [417, 833]
 //! set = { maxdistance = 0.5 }    # parameters of every run (and of the reference)
 //! vary = { sdminsize = [1, 10, 100] }   # swept: every combination, with every placement
+//! scenes = ["sibenik"]           # optional: only these scenes (default: all)
+//! per_pixel = [1, 2, 4]          # optional: the application's own estimator per pixel at these counts
 //! ```
 //!
 //! Depends on the application and placement registries (names, paper budgets) and on `toml`; it renders
@@ -76,6 +78,9 @@ struct AppSpec {
     set: BTreeMap<String, Value>,
     #[serde(default)]
     vary: BTreeMap<String, Vec<Value>>,
+    scenes: Option<Vec<String>>,
+    #[serde(default)]
+    per_pixel: Vec<u32>,
 }
 
 /// The file as written.
@@ -118,6 +123,8 @@ pub struct Job {
     pub varied: String,
     /// The id of the reference job this run is measured against (its own id for a reference).
     pub reference: String,
+    /// For a per-pixel run of the application's own estimator (placement `none`): its sample count.
+    pub samples: Option<u32>,
 }
 
 impl Job {
@@ -125,7 +132,20 @@ impl Job {
     pub fn is_reference(&self) -> bool {
         self.id == self.reference
     }
+
+    /// The label of its method in tables and charts: the placement and the varied parameters, or
+    /// `per-pixel:N` for a per-pixel run.
+    pub fn method(&self) -> String {
+        match self.samples {
+            Some(n) => format!("{PER_PIXEL}:{n}"),
+            None if self.varied.is_empty() => self.placement.clone(),
+            None => format!("{} {}", self.placement, self.varied.replace(';', " ")),
+        }
+    }
 }
+
+/// The method label of per-pixel runs (`per-pixel:N`).
+pub const PER_PIXEL: &str = "per-pixel";
 
 /// A parsed spec: its jobs, references first.
 #[derive(Clone, Debug)]
@@ -237,15 +257,43 @@ pub fn parse(text: &str, path: &Path) -> Result<Spec> {
                 return Err(near(k, format!("experiment spec: {k} is both set and varied")));
             }
         }
+        if let Some(names) = &a.scenes
+            && let Some(bad) = names.iter().find(|n| !scenes.iter().any(|(s, _)| s == *n))
+        {
+            return Err(near(
+                bad,
+                format!("experiment spec: application \"{}\" names scene \"{bad}\", which no [[scene]] has", a.name),
+            ));
+        }
+        let per_sample = match (entry.per_sample, a.per_pixel.is_empty()) {
+            (_, true) => None,
+            (Some(p), false) if a.per_pixel.iter().all(|&n| n > 0) => Some(p),
+            (Some(_), false) => {
+                return Err(near("per_pixel", "experiment spec: per_pixel counts must be positive".into()));
+            }
+            (None, false) => {
+                return Err(near("per_pixel", format!("experiment spec: \"{}\" has no per-pixel form", a.name)));
+            }
+        };
+        if let Some(p) = per_sample
+            && a.vary.contains_key(p.count)
+        {
+            return Err(near(
+                p.count,
+                format!("experiment spec: per_pixel sets {} itself; it cannot be varied beside it", p.count),
+            ));
+        }
         let combos = combinations(&a.vary);
         for (scene, file_path) in &scenes {
+            if a.scenes.as_ref().is_some_and(|names| !names.contains(scene)) {
+                continue;
+            }
             // The reference depends on the application and the parameters of every run that are not
             // placement-only; a varied parameter that changes the reference gets one reference per value.
             for combo in &combos {
                 let mut set = fixed.clone();
                 set.extend(combo.iter().cloned());
-                let ref_set: Vec<(String, String)> =
-                    set.iter().filter(|(k, _)| !super::placement_only(k)).cloned().collect();
+                let ref_set = ref_set_of(&set);
                 let ref_id = format!("{scene}-{}-none{}", a.name, super::variant(&ref_set));
                 if !refs.iter().any(|j: &Job| j.id == ref_id) {
                     refs.push(Job {
@@ -257,10 +305,35 @@ pub fn parse(text: &str, path: &Path) -> Result<Spec> {
                         caches: 1,
                         seed: 0,
                         resolution: file.resolution,
-                        set: ref_set,
+                        set: ref_set.clone(),
                         varied: String::new(),
                         reference: ref_id.clone(),
+                        samples: None,
                     });
+                    // The application's own estimator per pixel, once per reference, every seed.
+                    for (&n, p) in a.per_pixel.iter().zip(std::iter::repeat(per_sample).flatten()) {
+                        // The reference's settings with the count replaced.
+                        let mut pp_set: Vec<(String, String)> =
+                            ref_set.iter().filter(|(k, _)| k != p.count).cloned().collect();
+                        pp_set.extend(p.set.iter().map(|(k, v)| (k.to_string(), v.to_string())));
+                        pp_set.push((p.count.to_string(), n.to_string()));
+                        for seed in 0..file.seeds {
+                            runs.push(Job {
+                                id: format!("{scene}-{}-pp{n}{}-s{seed}", a.name, super::variant(&ref_set)),
+                                scene: scene.clone(),
+                                file: file_path.clone(),
+                                application: a.name.clone(),
+                                placement: Placement::REFERENCE.to_string(),
+                                caches: 1,
+                                seed,
+                                resolution: file.resolution,
+                                set: pp_set.clone(),
+                                varied: String::new(),
+                                reference: ref_id.clone(),
+                                samples: Some(n),
+                            });
+                        }
+                    }
                 }
                 let varied: String = combo.iter().map(|(k, v)| format!("{k}={v};")).collect();
                 for &caches in &budgets {
@@ -285,6 +358,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Spec> {
                                 set: set.clone(),
                                 varied: varied.trim_end_matches(';').to_string(),
                                 reference: ref_id.clone(),
+                                samples: None,
                             });
                         }
                     }
@@ -302,6 +376,11 @@ pub fn parse(text: &str, path: &Path) -> Result<Spec> {
         ));
     }
     Ok(Spec { path: path.to_path_buf(), jobs })
+}
+
+/// The pairs of `set` that change the reference (those that are not placement-only).
+fn ref_set_of(set: &[(String, String)]) -> Vec<(String, String)> {
+    set.iter().filter(|(k, _)| !super::placement_only(k)).cloned().collect()
 }
 
 /// Every combination of the varied values (one empty combination when nothing varies), keys in order.
@@ -358,6 +437,24 @@ mod tests {
         let s =
             spec("placements = [\"im\"]\ncaches = [10]\nset = { subpixels = 2 }\nvary = { seed = [1, 2] }\n").unwrap();
         assert_eq!(s.jobs.iter().filter(|j| j.is_reference()).count(), 2);
+    }
+
+    #[test]
+    fn per_pixel_runs_use_the_reference_settings_with_the_count_replaced_and_scenes_filter() {
+        let s = spec("placements = [\"im\"]\ncaches = [10]\nset = { gather = 8 }\nper_pixel = [2, 4]\n").unwrap();
+        let pp: Vec<&Job> = s.jobs.iter().filter(|j| j.samples.is_some()).collect();
+        assert_eq!(pp.len(), 2 * 2, "two counts × two seeds");
+        let count = registry::APPLICATIONS[0].per_sample.unwrap().count;
+        for j in &pp {
+            assert_eq!(j.placement, "none");
+            assert_eq!(j.set.iter().filter(|(k, _)| k == count).count(), 1, "{:?}", j.set);
+            assert_eq!(j.method(), format!("per-pixel:{}", j.samples.unwrap()));
+            assert_eq!(j.reference, s.jobs[0].id);
+        }
+        let e = spec("placements = [\"im\"]\ncaches = [10]\nscenes = [\"nope\"]\n").unwrap_err().to_string();
+        assert!(e.contains("nope") && e.contains("[[scene]]"), "{e}");
+        let s = spec("placements = [\"im\"]\ncaches = [10]\nscenes = [\"a-s\"]\n").unwrap();
+        assert_eq!(s.jobs.len(), 1 + 2);
     }
 
     #[test]

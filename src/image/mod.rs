@@ -21,7 +21,7 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 
-pub use png::{linear_to_srgb, srgb_to_linear, write_rgb8_png};
+pub use png::{linear_to_srgb, png_bytes, rgb8_png_bytes, srgb_to_linear, write_rgb8_png};
 
 /// Linear f32 RGB, row-major, top row first.
 #[derive(Clone, Debug, PartialEq)]

@@ -57,6 +57,24 @@ fn encode_rgb8(width: usize, height: usize, rgb: &[u8], out: &mut impl Write) ->
         .map_err(|e| format!("cannot encode PNG: {e}"))
 }
 
+/// `image` as the bytes of an 8-bit sRGB PNG file (for pages that embed their pictures).
+pub fn png_bytes(image: &Image) -> Result<Vec<u8>> {
+    let mut out = Vec::new();
+    encode(image, &mut out).map_err(Error::usage)?;
+    Ok(out)
+}
+
+/// Ready-made 8-bit RGB colours (row-major, top row first) as the bytes of a PNG file.
+pub fn rgb8_png_bytes(width: usize, height: usize, rgb: &[[u8; 3]]) -> Result<Vec<u8>> {
+    if width.checked_mul(height) != Some(rgb.len()) {
+        return Err(Error::usage(format!("cannot encode {} colours as a {width}×{height} image", rgb.len())));
+    }
+    let bytes: Vec<u8> = rgb.iter().flatten().copied().collect();
+    let mut out = Vec::new();
+    encode_rgb8(width, height, &bytes, &mut out).map_err(Error::usage)?;
+    Ok(out)
+}
+
 /// Writes 8-bit RGB colours as they are (no transfer curve): `rgb` holds `width * height` pixels, row by
 /// row from the top. Atomic like [`super::write`]; the path must end in `.png`.
 pub fn write_rgb8_png(width: usize, height: usize, rgb: &[[u8; 3]], path: &Path) -> Result<()> {

@@ -33,7 +33,7 @@ use crate::scene::ray::RayCounters;
 use crate::shading::light::LightSelect;
 use crate::shading::{Spectrum, luminance};
 
-use super::{Application, Baseline, Neighbour};
+use super::{Application, Baseline, Neighbour, PerSample};
 use distribution::Quantised;
 use mixture::{LETTERS, Mis, Mixture};
 use vpl::{Receiver, Vpls};
@@ -218,6 +218,8 @@ impl Application for ImportanceCache {
     const DGS_GEOMETRY: bool = false;
     const PAPER_CACHES: usize = 25_000;
     const QUICK: &'static [(&'static str, &'static str)] = &[("vpls", "1024")];
+    /// `draws` VPLs drawn by flux at every sub-pixel sample (the VPL sum the reference evaluates whole).
+    const PER_SAMPLE: Option<PerSample> = Some(PerSample { count: "draws", set: &[("sampling", "power")] });
 
     type Record = ImportanceRecord;
     type Prepared<'s> = Lit<'s>;
