@@ -268,8 +268,14 @@ fn table(rows: &[Row], sweep: &Sweep) -> String {
         if !measured.is_empty() {
             let _ = writeln!(
                 t,
-                "\n{scene}, against the converged per-pixel image (`none`: the per-sample reference; `LABEL:N`: \
-                 the per-pixel baseline, N rays (or draws) per sample × 4 pixel samples; placements: seed 0)\n\n\
+                "\n{scene}, against the converged image of the per-pixel baseline (`none`: the per-sample \
+                 reference; `LABEL:N`: the per-pixel baseline, N rays (or draws) per sample × 4 pixel samples; \
+                 placements: seed 0). Two references: the tables below measure against the per-sample reference, \
+                 this one against the baseline's converged image, which need not estimate the same quantity (for \
+                 ambient occlusion pbrt-v3's hemisphere about the geometric normal, while the caches and the \
+                 per-sample reference gather about the shading normal): the `none` row is the gap between the \
+                 two. A spec's `per_pixel` runs the application's own estimator instead, so they agree by \
+                 construction.\n\n\
                  | render | caches | RMSE | HDR-FLIP | total s |\n|---|---|---|---|---|"
             );
             for r in measured {
