@@ -21,8 +21,8 @@ fn cachert(args: &[&str]) -> (i32, String, String) {
     (out.status.code().unwrap_or(-1), s(&out.stdout), s(&out.stderr))
 }
 
-/// Chromium, installed by the project's script when missing; `None` (with the reason printed) when it
-/// cannot be had here.
+/// Chromium, installed (with a font for the charts) by the project's script where missing; `None` (with the
+/// reason printed) when it cannot be had here.
 fn chromium() -> Option<PathBuf> {
     let find = || {
         ["chromium", "chromium-browser", "google-chrome"].iter().find_map(|name| {
@@ -31,18 +31,16 @@ fn chromium() -> Option<PathBuf> {
             (out.status.success() && !path.is_empty()).then(|| PathBuf::from(path))
         })
     };
-    if let Some(p) = find() {
-        return Some(p);
-    }
     let script = root().join("scripts/install-report-tools.sh");
     let status = Command::new("bash").arg(&script).status();
-    match (status, find()) {
-        (_, Some(p)) => Some(p),
-        (s, None) => {
-            eprintln!("skipping the browser check: no chromium, and {} could not install it ({s:?})", script.display());
-            None
-        }
+    let found = find();
+    if found.is_none() {
+        eprintln!(
+            "skipping the browser check: no chromium, and {} could not install it ({status:?})",
+            script.display()
+        );
     }
+    found
 }
 
 /// The page's self-check after headless Chromium has loaded it: the body's `data-check` attribute.
@@ -77,6 +75,7 @@ fn a_sweep_writes_the_papers_tables_charts_and_a_report_that_loads_in_chromium()
             root().join("scenes/spheres.pbrt").display()
         ),
     );
+    let browser = chromium();
     let out = dir.path("out");
     let (code, stdout, stderr) =
         cachert(&["experiment", spec.to_str().unwrap(), "--out", out.to_str().unwrap(), "--nthreads", "2"]);
@@ -142,7 +141,7 @@ fn a_sweep_writes_the_papers_tables_charts_and_a_report_that_loads_in_chromium()
     // 3 charts + the comparer's 2 + reference + 6 × (image, map, overlay) + 2 windows × 7 crops.
     assert_eq!(images, 3 + 2 + 1 + 6 * 3 + 2 * 7, "pictures in the page");
 
-    let Some(browser) = chromium() else { return };
+    let Some(browser) = browser else { return };
     let check = browser_check(&browser, &page);
     assert_eq!(check, format!("ok images={images} broken= errors="), "the page's own check in Chromium");
 

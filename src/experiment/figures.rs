@@ -28,9 +28,13 @@ pub struct Figure {
     pub caption: String,
 }
 
-/// Writes every chart of `records` into `out`.
-pub fn write(records: &[Record], out: &Path) -> Result<Vec<Figure>> {
+/// Writes every chart of `records` into `out`. Without a font for their text there are none; `log` says why.
+pub fn write(records: &[Record], out: &Path, log: &mut dyn FnMut(&str)) -> Result<Vec<Figure>> {
     let mut figures = Vec::new();
+    if let Err(e) = chart::font() {
+        log(&format!("no charts: {e}"));
+        return Ok(figures);
+    }
     for (scene, app) in pairs(records) {
         let label = format!("{scene}-{app}");
         let rows: Vec<Row> = ok(records)

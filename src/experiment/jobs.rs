@@ -367,7 +367,7 @@ pub fn collect(spec: &Spec, out: &Path, log: &mut dyn FnMut(&str)) -> Result<(Ve
     let json =
         serde_json::to_string_pretty(&records).map_err(|e| Error::file(out, format!("cannot encode results: {e}")))?;
     crate::image::write_bytes(&out.join("results.json"), json.as_bytes())?;
-    let figures = super::figures::write(&records, out)?;
+    let figures = super::figures::write(&records, out, log)?;
     let tables = super::tables::all(&records);
     let markdown: String = tables.iter().map(|t| t.markdown()).collect();
     crate::image::write_bytes(&out.join(TABLES), markdown.as_bytes())?;

@@ -218,8 +218,13 @@ pub fn run(sweep: &Sweep, log: &mut dyn FnMut(&str)) -> Result<(Vec<Row>, String
     write_results(&rows, &sweep.out)?;
     let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
     scenes.dedup();
-    for scene in scenes {
-        chart::write(&rows, scene, &sweep.out.join(format!("{scene}-error-vs-time.svg")))?;
+    match chart::font() {
+        Ok(()) => {
+            for scene in scenes {
+                chart::write(&rows, scene, &sweep.out.join(format!("{scene}-error-vs-time.svg")))?;
+            }
+        }
+        Err(e) => log(&format!("no charts: {e}")),
     }
     Ok((rows.clone(), table(&rows, sweep)))
 }
