@@ -109,15 +109,11 @@ fn group(spec: &Spec, records: &[Record], out: &Path, scene: &str, app: &str, n:
     };
     let reference = crate::image::read(&runs.join(format!("{reference_id}.exr")))?;
     let k = exposure(&reference);
-    let scaled = |img: &Image| {
-        let mut s = img.clone();
-        s.pixels.iter_mut().for_each(|p| *p = p.map(|v| v * k));
-        s
-    };
+    let whole = (0, 0, reference.width, reference.height);
     let mut pictures = vec![Picture {
         id: format!("g{n}-reference"),
         caption: "reference".into(),
-        png: crate::image::png_bytes(&scaled(&reference))?,
+        png: crate::image::png_bytes(&crop_scaled(&reference, k, whole))?,
     }];
     let mut maps: Vec<Picture> = Vec::new();
     let mut overlays: Vec<Picture> = Vec::new();
@@ -147,7 +143,11 @@ fn group(spec: &Spec, records: &[Record], out: &Path, scene: &str, app: &str, n:
                 png: bytes,
             });
         }
-        pictures.push(Picture { id: format!("g{n}-m{i}"), caption, png: crate::image::png_bytes(&scaled(&img))? });
+        pictures.push(Picture {
+            id: format!("g{n}-m{i}"),
+            caption,
+            png: crate::image::png_bytes(&crop_scaled(&img, k, whole))?,
+        });
         images.push((r.method.clone(), img));
     }
     let mut h = String::new();

@@ -311,7 +311,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Spec> {
                         samples: None,
                     });
                     // The application's own estimator per pixel, once per reference, every seed.
-                    for (&n, p) in a.per_pixel.iter().zip(std::iter::repeat(per_sample).flatten()) {
+                    for (p, &n) in per_sample.iter().flat_map(|p| a.per_pixel.iter().map(move |n| (p, n))) {
                         // The reference's settings with the count replaced.
                         let mut pp_set: Vec<(String, String)> =
                             ref_set.iter().filter(|(k, _)| k != p.count).cloned().collect();
