@@ -327,13 +327,35 @@ impl Accel {
     /// `hint` and remembering the new one. The answer is the same as [`Accel::occluded`]'s.
     #[inline]
     pub fn occluded_hinted(&self, ray: &Ray, from: Option<PrimOrigin>, hint: &mut OccluderHint) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if has_avx2() {
+            // SAFETY: the CPU supports AVX2.
+            return unsafe { self.occluded_hinted_avx2(ray, from, hint) };
+        }
+        self.occluded_hinted_impl::<false>(ray, from, hint)
+    }
+
+    /// [`Accel::occluded_hinted`] compiled with AVX2 enabled, so the hint test and the traversal inline.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn occluded_hinted_avx2(&self, ray: &Ray, from: Option<PrimOrigin>, hint: &mut OccluderHint) -> bool {
+        self.occluded_hinted_impl::<true>(ray, from, hint)
+    }
+
+    #[inline(always)]
+    fn occluded_hinted_impl<const WIDE: bool>(
+        &self,
+        ray: &Ray,
+        from: Option<PrimOrigin>,
+        hint: &mut OccluderHint,
+    ) -> bool {
         // One shear for the hint test and the traversal.
         let shear = RayShear::new(ray.o, ray.d);
         if hint.top != 0 && self.hint_blocks(ray, &shear, *hint) {
             return true;
         }
         let skip = Self::skip_for(from);
-        match self.any(&self.top, ray, &shear, Some(&skip)) {
+        match self.any_impl::<WIDE>(&self.top, ray, &shear, Some(&skip)) {
             Some((top, inner)) => {
                 *hint = OccluderHint { top: top + 1, inner };
                 true
@@ -347,6 +369,35 @@ impl Accel {
     /// [`Accel::occluded`]'s whatever `hint` and `cache` hold, so a cache may be kept across points and images.
     #[inline]
     pub fn occluded_cached(
+        &self,
+        ray: &Ray,
+        from: Option<PrimOrigin>,
+        hint: &mut OccluderHint,
+        cache: &mut OccluderCache,
+    ) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if has_avx2() {
+            // SAFETY: the CPU supports AVX2.
+            return unsafe { self.occluded_cached_avx2(ray, from, hint, cache) };
+        }
+        self.occluded_cached_impl::<false>(ray, from, hint, cache)
+    }
+
+    /// [`Accel::occluded_cached`] compiled with AVX2 enabled, so the blocker tests and the traversal inline.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn occluded_cached_avx2(
+        &self,
+        ray: &Ray,
+        from: Option<PrimOrigin>,
+        hint: &mut OccluderHint,
+        cache: &mut OccluderCache,
+    ) -> bool {
+        self.occluded_cached_impl::<true>(ray, from, hint, cache)
+    }
+
+    #[inline(always)]
+    fn occluded_cached_impl<const WIDE: bool>(
         &self,
         ray: &Ray,
         from: Option<PrimOrigin>,
@@ -373,7 +424,7 @@ impl Accel {
                 }
             }
         }
-        match self.any(&self.top, ray, &shear, Some(&skip)) {
+        match self.any_impl::<WIDE>(&self.top, ray, &shear, Some(&skip)) {
             Some((top, inner)) => {
                 *hint = OccluderHint { top: top + 1, inner };
                 if on {
@@ -402,7 +453,7 @@ impl Accel {
     /// Whether the remembered blocker `hint` blocks `ray` (whose shear is `shear`). A point's hint is only
     /// ever set from a traversal that left out the surface its rays leave, or from a cache guess checked with
     /// [`Accel::is_skipped`], so it is never that surface.
-    #[inline]
+    #[inline(always)]
     fn hint_blocks(&self, ray: &Ray, shear: &RayShear, hint: OccluderHint) -> bool {
         let Some(it) = self.top.items.get(hint.top as usize - 1) else { return false };
         match it.r {
@@ -430,7 +481,7 @@ impl Accel {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn item_blocks(&self, it: &Item, ray: &Ray, shear: &RayShear) -> bool {
         match it.r {
             PrimRef::Triangle { .. } => triangle::intersect(shear, &it.verts, ray.t_max).is_some(),
