@@ -40,19 +40,32 @@ const WEIGHTS: [u32; 256] = {
 };
 
 /// The code whose weight is nearest to `x` (in ratio), for 0 ≤ x ≤ [`MAX_WEIGHT`]; 0 below half the
-/// smallest weight.
+/// smallest weight. Computed from the bits of `x` without branches or library calls (this runs for every
+/// VPL of every distribution, and the loop over them vectorises): the octave e = ⌊log₂(x/16)⌋ is x's binary
+/// exponent − 4; x/2^e − 16 ∈ [0, 16) is exact and a multiple of 2⁻¹⁹, so adding ½ is exact and truncating
+/// rounds half away from zero as `f32::round` does. m = 16 (just below the next octave) gives that octave's
+/// first code, (e + 1)·16 + 1 = e·16 + m + 1. Below 16 the clamped octave 0 and a negative offset give
+/// code 1; below 8 (and NaN) the comparison gives 0.
+#[inline]
 fn code_of(x: f32) -> u8 {
-    if x.is_nan() || x < 8.0 {
-        return 0;
+    let e = (((x.to_bits() >> 23) & 0xff) as i32 - 127 - 4).clamp(0, 15) as u32;
+    let scaled = x * f32::from_bits((127 - e) << 23) - 16.0;
+    let m = ((scaled + 0.5) as u32).min(16);
+    let c = ((e << 4) + m + 1).min(255) as u8;
+    if x >= 8.0 { c } else { 0 }
+}
+
+/// The largest finite value of `values`, and at least 0: eight running maxima (a select, not `f32::max`,
+/// whose NaN rule keeps the compiler from vectorising), combined at the end.
+pub fn finite_max(values: &[f32]) -> f32 {
+    let mut lanes = [0.0f32; 8];
+    for chunk in values.chunks(8) {
+        for (l, &w) in lanes.iter_mut().zip(chunk) {
+            let v = if w.is_finite() { w } else { 0.0 };
+            *l = if v > *l { v } else { *l };
+        }
     }
-    if x <= 16.0 {
-        return 1;
-    }
-    // Octave e: 16·2^e ≤ x < 32·2^e.
-    let e = ((x / 16.0).log2().floor() as i32).clamp(0, 15) as u32;
-    let m = (x / (1u32 << e) as f32 - 16.0).round().clamp(0.0, 16.0) as u32;
-    let c = if m == 16 { ((e + 1) << 4) + 1 } else { (e << 4) + m + 1 };
-    c.min(255) as u8
+    lanes.iter().fold(0.0f32, |a, &b| if b > a { b } else { a })
 }
 
 /// A quantised discrete distribution over n items.
@@ -69,7 +82,7 @@ impl Quantised {
     /// The distribution proportional to `weights` (negative and non-finite values count as 0), quantised;
     /// `None` when every weight is 0.
     pub fn new(weights: &[f32]) -> Option<Self> {
-        let max = weights.iter().copied().filter(|w| w.is_finite()).fold(0.0f32, f32::max);
+        let max = finite_max(weights);
         if max <= 0.0 {
             return None;
         }
@@ -176,6 +189,33 @@ mod tests {
         let kept = Quantised::new(&[max, Quantised::smallest_kept(max), Quantised::smallest_kept(max) * 0.99]).unwrap();
         assert!(kept.pdf(1) > 0.0 && kept.pdf(2) == 0.0);
         assert_eq!(code_of(f32::NAN), 0);
+    }
+
+    /// The library-call formula `code_of` replaces.
+    fn code_by_log2(x: f32) -> u8 {
+        if x.is_nan() || x < 8.0 {
+            return 0;
+        }
+        if x <= 16.0 {
+            return 1;
+        }
+        let e = ((x / 16.0).log2().floor() as i32).clamp(0, 15) as u32;
+        let m = (x / (1u32 << e) as f32 - 16.0).round().clamp(0.0, 16.0) as u32;
+        let c = if m == 16 { ((e + 1) << 4) + 1 } else { (e << 4) + m + 1 };
+        c.min(255) as u8
+    }
+
+    #[test]
+    fn codes_from_bits_equal_the_logarithm_formula_for_every_float_in_range() {
+        // Every f32 from 7 to 2^21 (past MAX_WEIGHT), plus the extremes.
+        let (lo, hi) = (7.0f32.to_bits(), ((1u32 << 21) as f32).to_bits());
+        for b in lo..=hi {
+            let x = f32::from_bits(b);
+            assert_eq!(code_of(x), code_by_log2(x), "{x:e}");
+        }
+        for x in [0.0, -1.0, f32::INFINITY, f32::MAX, 1e30, f32::NAN] {
+            assert_eq!(code_of(x), code_by_log2(x), "{x:e}");
+        }
     }
 
     #[test]

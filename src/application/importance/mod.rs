@@ -373,24 +373,22 @@ impl Application for ImportanceCache {
     fn compute_record(&self, cx: &Lit<'_>, at: &ShadingPoint, _: &mut Rng, rays: &mut RayCounters) -> ImportanceRecord {
         let Some(x) = cx.receiver(at) else { return ImportanceRecord { at: *at, dists: [None, None, None] } };
         let n = cx.vpls.len();
-        let mut unoccluded = vec![0.0f32; n];
-        let mut shadows = Vec::with_capacity(n);
-        for (j, u) in unoccluded.iter_mut().enumerate() {
-            if let Some(c) = cx.vpls.unoccluded(&cx.shading, j, &x) {
-                *u = luminance(c.value);
-                shadows.push((j, c.shadow));
-            }
-        }
+        let unoccluded: Vec<f32> =
+            (0..n).map(|j| cx.vpls.unoccluded_value(&cx.shading, j, &x).map_or(0.0, luminance)).collect();
         // A VPL whose unoccluded contribution quantises to 0 gets no shadow ray: F is 0 for it too (C still
-        // draws it), and the shadow rays go to the VPLs that matter.
-        let floor = Quantised::smallest_kept(unoccluded.iter().copied().fold(0.0, f32::max));
+        // draws it), and the shadow rays go to the VPLs that matter. (With every value 0 there is nothing
+        // to trace: F and U are both empty.)
+        let max = distribution::finite_max(&unoccluded);
+        let floor = Quantised::smallest_kept(max);
         let mut full = vec![0.0f32; n];
         let mut hint = OccluderHint::default();
-        for (j, ray) in shadows {
-            if unoccluded[j] >= floor {
-                rays.shadow += 1;
-                if !cx.scene.geometry.occluded_hinted(&ray, None, &mut hint) {
-                    full[j] = unoccluded[j];
+        if max > 0.0 {
+            for (j, (&u, f)) in unoccluded.iter().zip(full.iter_mut()).enumerate() {
+                if u >= floor {
+                    rays.shadow += 1;
+                    if !cx.scene.geometry.occluded_hinted(&cx.vpls.shadow_ray(j, &x), None, &mut hint) {
+                        *f = u;
+                    }
                 }
             }
         }

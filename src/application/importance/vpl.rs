@@ -352,11 +352,18 @@ impl Vpls {
     /// I_j(x) of VPL `j` at receiver `x` without visibility, and its shadow ray; `None` when it is 0.
     #[inline]
     pub fn unoccluded(&self, sh: &Shading<'_>, j: usize, x: &Receiver) -> Option<Unoccluded> {
+        let value = self.unoccluded_value(sh, j, x)?;
+        Some(Unoccluded { value, shadow: self.shadow_ray(j, x) })
+    }
+
+    /// I_j(x) of VPL `j` at receiver `x` without visibility; `None` when it is 0.
+    #[inline]
+    pub fn unoccluded_value(&self, sh: &Shading<'_>, j: usize, x: &Receiver) -> Option<Spectrum> {
         let vpl = &self.list[j];
         if let Emitter::Directional = vpl.emitter {
             let w = vpl.ng;
             let value = vpl.power * x.f(w) * w.dot(x.bsdf.shading_normal()).abs();
-            return (value.max_element() > 0.0).then(|| Unoccluded { value, shadow: x.si.spawn_ray(w) });
+            return (value.max_element() > 0.0).then_some(value);
         }
         let d = vpl.p - x.si.p;
         let d2 = d.length_squared();
@@ -373,8 +380,17 @@ impl Vpls {
         if value.max_element().is_nan() || value.max_element() <= 0.0 {
             return None;
         }
-        let to = SurfacePoint { p: vpl.p, p_error: vpl.p_error, n: vpl.ng };
-        Some(Unoccluded { value, shadow: spawn_ray_to(&x.si, &to) })
+        Some(value)
+    }
+
+    /// The shadow ray from receiver `x` to VPL `j` (along a directional VPL's direction, unbounded).
+    #[inline]
+    pub fn shadow_ray(&self, j: usize, x: &Receiver) -> Ray {
+        let vpl = &self.list[j];
+        if let Emitter::Directional = vpl.emitter {
+            return x.si.spawn_ray(vpl.ng);
+        }
+        spawn_ray_to(&x.si, &SurfacePoint { p: vpl.p, p_error: vpl.p_error, n: vpl.ng })
     }
 
     /// I_j(x) with visibility (one shadow ray when the unoccluded value is not 0).
