@@ -397,8 +397,8 @@ impl Application for ImportanceCache {
 
     fn diff(&self, a: &ImportanceRecord, b: &ImportanceRecord) -> f32 {
         match (&a.dists[0], &b.dists[0]) {
-            (Some(fa), Some(fb)) => (0..fa.len()).map(|j| (fa.value(j) - fb.value(j)).abs()).sum(),
-            (Some(f), None) | (None, Some(f)) => (0..f.len()).map(|j| f.value(j)).sum(),
+            (Some(fa), Some(fb)) => fa.abs_diff_sum(fb),
+            (Some(f), None) | (None, Some(f)) => f.value_sum(),
             (None, None) => 0.0,
         }
     }
