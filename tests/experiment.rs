@@ -1,6 +1,6 @@
 //! Behaviour of `cachert experiment`: the sweep's rows, files and table on a shipped scene, the error
 //! falling with the budget, the per-pixel comparison against the converged image, and the reference being
-//! reused on a second run.
+//! reused on a second run; an importance-caching sweep times both of its many-light baselines.
 
 mod common;
 
@@ -58,4 +58,25 @@ fn a_sweep_writes_every_row_and_its_files_and_reuses_the_reference() {
     run(&other, &mut |l| log.push(l.to_string())).unwrap();
     assert!(log.iter().any(|l| l.contains("reference in")), "{log:?}");
     assert!(log.iter().any(|l| l.contains("converged per-pixel image")), "{log:?}");
+}
+
+#[test]
+fn an_importance_caching_sweep_times_both_many_light_baselines() {
+    let dir = common::TempDir::new("experiment-imc");
+    let s = Sweep {
+        scenes: vec![Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/room.pbrt")],
+        resolution: Some([24, 18]),
+        caches: vec![16],
+        integrator: "importancecache".into(),
+        placements: vec![Placement::parse("vgc+dgs").unwrap()],
+        seeds: 1,
+        set: vec![("vpls".into(), "64".into())],
+        ..sweep(&dir.0, vec![1, 8])
+    };
+    let (rows, _) = run(&s, &mut |_| {}).unwrap();
+    let names: Vec<&str> = rows.iter().map(|r| r.placement.as_str()).collect();
+    assert_eq!(names, ["none", "power:1", "power:8", "uniform:1", "uniform:8", "vgc+dgs"], "{rows:#?}");
+    // Both estimate the reference's sum: more draws, less error against it.
+    let err = |p: &str| rows.iter().find(|r| r.placement == p).unwrap().rmse;
+    assert!(err("power:8") < err("power:1") && err("uniform:8") < err("uniform:1"), "{rows:#?}");
 }

@@ -125,16 +125,16 @@ impl Application for CacheAo {
     }
 
     /// pbrt-v3's `ambientocclusion` with the same ray length and cosine sampling, divided by π.
-    fn baseline(&self) -> Option<Baseline> {
+    fn baselines(&self) -> Vec<Baseline> {
         // The per-pixel integrator needs a finite length: 1e30 is "unbounded" for any scene.
         let d = if self.max_distance.is_finite() { self.max_distance.to_string() } else { "1e30".into() };
-        Some(Baseline {
+        vec![Baseline {
             label: "ao",
             integrator: "ambientocclusion",
             set: vec![("maxdistance".into(), d), ("cossample".into(), "true".into())],
             samples: "nsamples",
             scale: std::f32::consts::FRAC_1_PI,
-        })
+        }]
     }
 
     fn compute_record(

@@ -165,13 +165,14 @@ impl IrradianceCache {
             if vertices >= self.max_depth {
                 break;
             }
-            let bsdf = match pass.bsdf(sh, &si, &ray) {
-                Ok(b) => b,
-                Err(Some(next)) => {
-                    ray = next;
-                    continue;
+            let Some(bsdf) = sh.bsdf(&si) else {
+                match pass.past(&si, &ray) {
+                    Some(next) => {
+                        ray = next;
+                        continue;
+                    }
+                    None => break,
                 }
-                Err(None) => break,
             };
             let wo = -ray.d;
             let x = ShadePoint { si: &si, bsdf: &bsdf, wo };

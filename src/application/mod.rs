@@ -134,9 +134,10 @@ pub trait Application: Sync + Sized {
     /// The resolved parameters (defaults filled in), for the `--stats` report.
     fn settings(&self) -> Vec<(&'static str, serde_json::Value)>;
 
-    /// The per-pixel integrator computing the same image, if there is one.
-    fn baseline(&self) -> Option<Baseline> {
-        None
+    /// The per-pixel integrators computing the same image (none, one, or several compared side by side);
+    /// the first is the one an experiment renders converged.
+    fn baselines(&self) -> Vec<Baseline> {
+        Vec::new()
     }
 
     /// The per-pixel integrator whose image is added to the cached one, if any (the cached image and the

@@ -51,8 +51,9 @@ pub struct ExperimentArgs {
     /// Worker threads.
     #[arg(long)]
     pub nthreads: Option<usize>,
-    /// Also time the integrator's per-pixel baseline (pbrt-v3's `ambientocclusion` for AO) at these ray
-    /// counts (per pixel sample, comma-separated) against the same reference.
+    /// Also time the integrator's per-pixel baselines (pbrt-v3's `ambientocclusion` for AO; power and uniform
+    /// VPL sampling for importance caching) at these ray counts (per pixel sample, comma-separated) against
+    /// the same reference.
     #[arg(long = "baseline-samples", visible_alias = "ao-samples", conflicts_with = "spec")]
     pub baseline_samples: Option<String>,
 }

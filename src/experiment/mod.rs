@@ -3,7 +3,8 @@
 //! built from these files, never from logs) and a table of averages over seeds.
 //!
 //! Any cache-based integrator of the application registry can be swept (`Sweep::integrator`); the per-pixel
-//! comparison uses the application's own per-pixel baseline (`Application::baseline`).
+//! comparison uses the application's own per-pixel baselines (`Application::baselines`; the first
+//! gives the converged image).
 //!
 //! Depends on `scene`, `render`, `application` (the registry), `image` and `metrics`; nothing depends on it.
 
@@ -51,8 +52,9 @@ pub struct Sweep {
     pub out: PathBuf,
     /// Worker threads.
     pub threads: Option<usize>,
-    /// Also render the application's per-pixel baseline (pbrt-v3's `ambientocclusion` for AO) with these ray
-    /// counts (per pixel sample) and measure it against the same reference (rows `ao:N`), with the
+    /// Also render the application's per-pixel baselines (pbrt-v3's `ambientocclusion` for AO; power and
+    /// uniform VPL sampling for importance caching) with these ray counts (per pixel sample) and measure them
+    /// against the same reference (rows `ao:N`, `power:N`, `uniform:N`), with the
     /// reference's own time (row `none`).
     pub baseline_samples: Vec<u32>,
 }
@@ -169,14 +171,14 @@ pub fn run(sweep: &Sweep, log: &mut dyn FnMut(&str)) -> Result<(Vec<Row>, String
         let converged = if sweep.baseline_samples.is_empty() {
             None
         } else {
-            let base = per_pixel::baseline(&l, sweep)?;
-            let conv = per_pixel::converged(&mut l, sweep, &base, &stored, log)?;
+            let bases = per_pixel::baselines(&l, sweep)?;
+            let conv = per_pixel::converged(&mut l, sweep, &bases[0], &stored, log)?;
             let times = StageTimes { total: ref_secs, ..Default::default() };
             let stats = CacheStats { times, ..Default::default() };
             let against = Some(per_pixel::measure(&reference, &conv)?);
             let (scene, placement) = (name.clone(), "none".to_string());
             rows.push(Row { scene, placement, caches: 0, seed: 0, rmse: 0.0, flip: 0.0, converged: against, stats });
-            rows.extend(per_pixel::rows(&mut l, sweep, &base, &name, (&reference, &conv), log)?);
+            rows.extend(per_pixel::rows(&mut l, sweep, &bases, &name, (&reference, &conv), log)?);
             Some(conv)
         };
         for &caches in &sweep.caches {

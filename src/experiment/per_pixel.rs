@@ -29,7 +29,7 @@ const PIXEL_SAMPLES: u32 = 4;
 /// Converged image: pixel samples and rays per pixel sample (4096 rays per pixel).
 const CONVERGED: (u32, u32) = (64, 64);
 
-/// The application's baseline, resolved with the parameters the cache runs use (the scene's Integrator
+/// The application's baselines, resolved with the parameters the cache runs use (the scene's Integrator
 /// line when it names the application, then the sweep's `--set`).
 struct BaselineOf<'a> {
     scene: &'a Scene,
@@ -38,20 +38,25 @@ struct BaselineOf<'a> {
 }
 
 impl WithApplication for BaselineOf<'_> {
-    type Output = Result<Option<Baseline>>;
+    type Output = Result<Vec<Baseline>>;
     fn apply<A: Application>(self) -> Self::Output {
         let empty = ParamList::default();
         let params = self.integrator.filter(|n| n.name == A::NAME).map_or(&empty, |n| &n.params);
-        Ok(A::from_params(&IntegratorParams::new(params, self.set), self.scene)?.baseline())
+        Ok(A::from_params(&IntegratorParams::new(params, self.set), self.scene)?.baselines())
     }
 }
 
-/// The per-pixel baseline of the sweep's integrator; an error when it has none.
-pub(super) fn baseline(l: &LoadedScene, sweep: &Sweep) -> Result<Baseline> {
+/// The per-pixel baselines of the sweep's integrator (never empty: an error when it has none).
+pub(super) fn baselines(l: &LoadedScene, sweep: &Sweep) -> Result<Vec<Baseline>> {
     let of = BaselineOf { scene: &l.scene, integrator: l.integrator.as_ref(), set: &sweep.set };
-    registry::dispatch(&sweep.integrator, of).transpose()?.flatten().ok_or_else(|| {
-        Error::usage(format!("experiment: \"{}\" has no per-pixel baseline to compare with", sweep.integrator))
-    })
+    let all = registry::dispatch(&sweep.integrator, of).transpose()?.unwrap_or_default();
+    if all.is_empty() {
+        return Err(Error::usage(format!(
+            "experiment: \"{}\" has no per-pixel baseline to compare with",
+            sweep.integrator
+        )));
+    }
+    Ok(all)
 }
 
 /// RMSE and mean HDR-FLIP of `img` against `reference`.
@@ -81,9 +86,26 @@ pub(super) fn converged(
     Ok(img)
 }
 
-/// One row per entry of `sweep.baseline_samples` (rays per pixel sample, four pixel samples): placement
-/// `LABEL:N` (`ao:N`), budget 0, seed 0; `rmse`/`flip` against `reference`, `converged` against `conv`.
+/// One row per baseline and entry of `sweep.baseline_samples` (rays per pixel sample, four pixel samples):
+/// placement `LABEL:N` (`ao:N`, `power:N`), budget 0, seed 0; `rmse`/`flip` against `reference`,
+/// `converged` against `conv`.
 pub(super) fn rows(
+    l: &mut LoadedScene,
+    sweep: &Sweep,
+    bases: &[Baseline],
+    name: &str,
+    (reference, conv): (&Image, &Image),
+    log: &mut dyn FnMut(&str),
+) -> Result<Vec<Row>> {
+    let mut out = Vec::new();
+    for base in bases {
+        out.extend(rows_of(l, sweep, base, name, (reference, conv), log)?);
+    }
+    Ok(out)
+}
+
+/// The rows of one baseline.
+fn rows_of(
     l: &mut LoadedScene,
     sweep: &Sweep,
     base: &Baseline,

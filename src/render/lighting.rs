@@ -66,22 +66,13 @@ pub struct PassThrough {
 }
 
 impl PassThrough {
-    /// The BSDF at `si`, or for a surface without material the ray that continues past it (`None` once the
-    /// path has passed [`MAX_PASS_THROUGH`] of them: it gives up).
+    /// The ray that continues past `si`, a surface without material that `ray` hit (`None` once the path
+    /// has passed [`MAX_PASS_THROUGH`] of them: it gives up). Callers ask [`Shading::bsdf`] first and come
+    /// here when it has none; the BSDF is not passed through this function, so it is not copied.
     #[inline]
-    pub fn bsdf(
-        &mut self,
-        sh: &Shading<'_>,
-        si: &SurfaceInteraction,
-        ray: &Ray,
-    ) -> std::result::Result<Bsdf, Option<Ray>> {
-        match sh.bsdf(si) {
-            Some(b) => Ok(b),
-            None => {
-                self.passes += 1;
-                Err((self.passes <= MAX_PASS_THROUGH).then(|| si.spawn_ray(ray.d)))
-            }
-        }
+    pub fn past(&mut self, si: &SurfaceInteraction, ray: &Ray) -> Option<Ray> {
+        self.passes += 1;
+        (self.passes <= MAX_PASS_THROUGH).then(|| si.spawn_ray(ray.d))
     }
 }
 

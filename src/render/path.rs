@@ -101,13 +101,14 @@ impl PixelIntegrator for Path<'_> {
             if bounces >= self.max_depth {
                 break;
             }
-            let bsdf = match pass.bsdf(sh, &si, &ray) {
-                Ok(b) => b,
-                Err(Some(next)) => {
-                    ray = next;
-                    continue;
+            let Some(bsdf) = sh.bsdf(&si) else {
+                match pass.past(&si, &ray) {
+                    Some(next) => {
+                        ray = next;
+                        continue;
+                    }
+                    None => break,
                 }
-                Err(None) => break,
             };
             let wo = -ray.d;
             let x = ShadePoint { si: &si, bsdf: &bsdf, wo };

@@ -343,24 +343,29 @@ impl Application for ImportanceCache {
         ]
     }
 
-    /// Power sampling with the same VPLs and sub-pixel samples; its sample count is `draws` (VPLs per
-    /// sample), so its pixels integrate the same footprint as the reference's.
-    fn baseline(&self) -> Option<Baseline> {
-        let set = [
-            ("sampling", "power".to_string()),
-            ("vpls", self.vpls.to_string()),
-            ("vpldepth", self.max_depth.to_string()),
-            ("vplseed", self.vpl_seed.to_string()),
-            ("clamp", self.clamp.to_string()),
-            ("distributions", self.letters()),
-        ];
-        Some(Baseline {
-            label: "power",
-            integrator: Self::NAME,
-            set: set.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
-            samples: "draws",
-            scale: 1.0,
-        })
+    /// Power sampling, then uniform sampling, with the same VPLs and sub-pixel samples; their sample count
+    /// is `draws` (VPLs per sample), so their pixels integrate the same footprint as the reference's.
+    fn baselines(&self) -> Vec<Baseline> {
+        [Sampling::Power, Sampling::Uniform]
+            .into_iter()
+            .map(|sampling| {
+                let set = [
+                    ("sampling", sampling.name().to_string()),
+                    ("vpls", self.vpls.to_string()),
+                    ("vpldepth", self.max_depth.to_string()),
+                    ("vplseed", self.vpl_seed.to_string()),
+                    ("clamp", self.clamp.to_string()),
+                    ("distributions", self.letters()),
+                ];
+                Baseline {
+                    label: sampling.name(),
+                    integrator: Self::NAME,
+                    set: set.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
+                    samples: "draws",
+                    scale: 1.0,
+                }
+            })
+            .collect()
     }
 
     fn without_caches(&self) -> Option<String> {

@@ -194,13 +194,14 @@ impl Vpls {
             let (mut depth, mut pass) = (0u32, PassThrough::default());
             while v.list.len() < count && depth < max_depth {
                 let Some(si) = scene.geometry.intersect(&ray) else { break };
-                let bsdf = match pass.bsdf(sh, &si, &ray) {
-                    Ok(b) => b,
-                    Err(Some(next)) => {
-                        ray = next;
-                        continue;
+                let Some(bsdf) = sh.bsdf(&si) else {
+                    match pass.past(&si, &ray) {
+                        Some(next) => {
+                            ray = next;
+                            continue;
+                        }
+                        None => break,
                     }
-                    Err(None) => break,
                 };
                 depth += 1;
                 let wi = -ray.d.normalize();

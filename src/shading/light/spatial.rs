@@ -33,6 +33,9 @@ pub struct SpatialSelect {
     extent: Vec3A,
     n: [usize; 3],
     cells: Vec<OnceLock<Distribution1D>>,
+    /// The points' radical inverses (bases 2, 3, 5: the position in the voxel; 7, 11: the light sample),
+    /// computed once rather than for every voxel.
+    halton: Box<[[f32; 5]]>,
 }
 
 impl SpatialSelect {
@@ -48,7 +51,8 @@ impl SpatialSelect {
             }
         }
         let count = (n[0] * n[1] * n[2]).min(MAX_CELLS);
-        SpatialSelect { lo, extent, n, cells: (0..count).map(|_| OnceLock::new()).collect() }
+        let halton = (0..SAMPLES).map(|i| [2, 3, 5, 7, 11].map(|b| radical_inverse(b, i))).collect();
+        SpatialSelect { lo, extent, n, cells: (0..count).map(|_| OnceLock::new()).collect(), halton }
     }
 
     /// The voxel holding `p` (clamped into the grid).
@@ -77,10 +81,9 @@ impl SpatialSelect {
         );
         let p0 = self.lo + Vec3A::new(v[0] as f32, v[1] as f32, v[2] as f32) * size;
         let mut contrib = vec![0.0f32; lights.len()];
-        for i in 0..SAMPLES {
-            let t = Vec3A::new(radical_inverse(2, i), radical_inverse(3, i), radical_inverse(5, i));
-            let at = point_interaction(p0 + t * size);
-            let u = [radical_inverse(7, i), radical_inverse(11, i)];
+        for &[x, y, z, u0, u1] in self.halton.iter() {
+            let at = point_interaction(p0 + Vec3A::new(x, y, z) * size);
+            let u = [u0, u1];
             for (j, c) in contrib.iter_mut().enumerate() {
                 if let Some(ls) = lights.sample_li_with::<false>(j, &at, u)
                     && ls.pdf > 0.0
