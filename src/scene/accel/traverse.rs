@@ -109,8 +109,7 @@ impl TravRay {
     #[inline]
     pub fn new(o: Vec3A, d: Vec3A, t_max: f32) -> Self {
         let safe = |v: f32| if v.abs() < TINY { TINY.copysign(v) } else { v };
-        // One vector division (each lane is the correctly rounded 1/x, as three scalar divisions give).
-        let inv_d = Vec3A::ONE / Vec3A::new(safe(d.x), safe(d.y), safe(d.z));
+        let inv_d = Vec3A::new(1.0 / safe(d.x), 1.0 / safe(d.y), 1.0 / safe(d.z));
         TravRay { o, inv_d, neg: [d.x.is_sign_negative(), d.y.is_sign_negative(), d.z.is_sign_negative()], t_max }
     }
 }

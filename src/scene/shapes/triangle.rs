@@ -29,9 +29,8 @@ impl RayShear {
         };
         let kx = if kz == 2 { 0 } else { kz + 1 };
         let ky = if kx == 2 { 0 } else { kx + 1 };
-        // One vector division: each lane is correctly rounded, exactly as the three scalar divisions.
-        let s = Vec3A::new(-d[kx], -d[ky], 1.0) / Vec3A::splat(d[kz]);
-        RayShear { o, k: [kx, ky, kz], s: s.to_array() }
+        let dz = d[kz];
+        RayShear { o, k: [kx, ky, kz], s: [-d[kx] / dz, -d[ky] / dz, 1.0 / dz] }
     }
 }
 
