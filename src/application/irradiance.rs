@@ -166,13 +166,9 @@ impl IrradianceCache {
                 break;
             }
             let Some(bsdf) = sh.bsdf(&si) else {
-                match pass.past(&si, &ray) {
-                    Some(next) => {
-                        ray = next;
-                        continue;
-                    }
-                    None => break,
-                }
+                let Some(next) = pass.past(&si, &ray) else { break };
+                ray = next;
+                continue;
             };
             let wo = -ray.d;
             let x = ShadePoint { si: &si, bsdf: &bsdf, wo };

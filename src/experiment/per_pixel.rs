@@ -119,9 +119,9 @@ fn rows_of(
         let (rmse, flip) = measure(&img, reference)?;
         let against = measure(&img, conv)?;
         log(&format!(
-            "{name} {} {}={n} x {PIXEL_SAMPLES} spp: rmse {rmse:.5} flip {flip:.5}, against the \
+            "{name} {}:{n} ({} {}={n} x {PIXEL_SAMPLES} spp): rmse {rmse:.5} flip {flip:.5}, against the \
              converged image rmse {:.5} flip {:.5} ({secs:.1} s)",
-            base.integrator, base.samples, against.0, against.1
+            base.label, base.integrator, base.samples, against.0, against.1
         ));
         let times = StageTimes { render: secs, total: secs, ..Default::default() };
         let (scene, placement) = (name.to_string(), format!("{}:{n}", base.label));

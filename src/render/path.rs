@@ -102,13 +102,9 @@ impl PixelIntegrator for Path<'_> {
                 break;
             }
             let Some(bsdf) = sh.bsdf(&si) else {
-                match pass.past(&si, &ray) {
-                    Some(next) => {
-                        ray = next;
-                        continue;
-                    }
-                    None => break,
-                }
+                let Some(next) = pass.past(&si, &ray) else { break };
+                ray = next;
+                continue;
             };
             let wo = -ray.d;
             let x = ShadePoint { si: &si, bsdf: &bsdf, wo };

@@ -195,13 +195,9 @@ impl Vpls {
             while v.list.len() < count && depth < max_depth {
                 let Some(si) = scene.geometry.intersect(&ray) else { break };
                 let Some(bsdf) = sh.bsdf(&si) else {
-                    match pass.past(&si, &ray) {
-                        Some(next) => {
-                            ray = next;
-                            continue;
-                        }
-                        None => break,
-                    }
+                    let Some(next) = pass.past(&si, &ray) else { break };
+                    ray = next;
+                    continue;
                 };
                 depth += 1;
                 let wi = -ray.d.normalize();
