@@ -99,34 +99,20 @@ pub(super) fn rows(
 ) -> Result<Vec<Row>> {
     let mut out = Vec::new();
     for base in bases {
-        out.extend(rows_of(l, sweep, base, name, (reference, conv), log)?);
-    }
-    Ok(out)
-}
-
-/// The rows of one baseline.
-fn rows_of(
-    l: &mut LoadedScene,
-    sweep: &Sweep,
-    base: &Baseline,
-    name: &str,
-    (reference, conv): (&Image, &Image),
-    log: &mut dyn FnMut(&str),
-) -> Result<Vec<Row>> {
-    let mut out = Vec::new();
-    for &n in &sweep.baseline_samples {
-        let (img, secs) = per_pixel(l, sweep, base, PIXEL_SAMPLES, n)?;
-        let (rmse, flip) = measure(&img, reference)?;
-        let against = measure(&img, conv)?;
-        log(&format!(
-            "{name} {}:{n} ({} {}={n} x {PIXEL_SAMPLES} spp): rmse {rmse:.5} flip {flip:.5}, against the \
-             converged image rmse {:.5} flip {:.5} ({secs:.1} s)",
-            base.label, base.integrator, base.samples, against.0, against.1
-        ));
-        let times = StageTimes { render: secs, total: secs, ..Default::default() };
-        let (scene, placement) = (name.to_string(), format!("{}:{n}", base.label));
-        let stats = CacheStats { times, ..Default::default() };
-        out.push(Row { scene, placement, caches: 0, seed: 0, rmse, flip, converged: Some(against), stats });
+        for &n in &sweep.baseline_samples {
+            let (img, secs) = per_pixel(l, sweep, base, PIXEL_SAMPLES, n)?;
+            let (rmse, flip) = measure(&img, reference)?;
+            let against = measure(&img, conv)?;
+            log(&format!(
+                "{name} {}:{n} ({} {}={n} x {PIXEL_SAMPLES} spp): rmse {rmse:.5} flip {flip:.5}, against the \
+                 converged image rmse {:.5} flip {:.5} ({secs:.1} s)",
+                base.label, base.integrator, base.samples, against.0, against.1
+            ));
+            let times = StageTimes { render: secs, total: secs, ..Default::default() };
+            let (scene, placement) = (name.to_string(), format!("{}:{n}", base.label));
+            let stats = CacheStats { times, ..Default::default() };
+            out.push(Row { scene, placement, caches: 0, seed: 0, rmse, flip, converged: Some(against), stats });
+        }
     }
     Ok(out)
 }

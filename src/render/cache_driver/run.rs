@@ -13,7 +13,7 @@ use glam::Vec3A;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
-use crate::application::{Application, Baseline, Neighbour};
+use crate::application::{Application, Neighbour};
 use crate::cache::{CacheIndex, GroupScratch};
 use crate::error::{Error, Result};
 use crate::gbuffer::{GBuffer, PixelId, shading_point};
@@ -43,8 +43,6 @@ pub struct CachedOutput {
     pub discontinuity: Option<Vec<f32>>,
     /// The resolved settings, generic and the application's, as the `--stats` report writes them.
     pub settings: serde_json::Map<String, serde_json::Value>,
-    /// The per-pixel integrators computing the same image (the application's `baselines`).
-    pub baselines: Vec<Baseline>,
 }
 
 /// Bytes in a GiB (for messages).
@@ -245,7 +243,7 @@ pub fn render_cached<A: Application>(
     stats.peak_memory_bytes = peak_memory_bytes();
     let mut settings = s.to_json();
     settings.extend(app.settings().into_iter().map(|(k, v)| (k.to_string(), v)));
-    Ok(CachedOutput { image, stats, stage1, stage2, discontinuity, settings, baselines: app.baselines() })
+    Ok(CachedOutput { image, stats, stage1, stage2, discontinuity, settings })
 }
 
 /// The evaluated caches as shading reads them: the lookup index, the records and each cache's (p, n).
