@@ -16,7 +16,8 @@
 //! cell-centre rule overestimates Σ cos θ_k by 3 % at n = 8, 0.05 % at n = 64), as cache AO normalises by
 //! its Σ cos θ_k. The record keeps E and, until placement is over, the luminance of
 //! every L_k, which is what two caches are compared by (Σ_k |ΔY|, §4.5.2). A sample is shaded as
-//! ρ_hd(ω_o)·E/π with E blended from its caches, ρ_hd over the BSDF's non-specular reflection lobes (exact
+//! ρ_hd(ω_o)·E/π with E blended from its caches (ALGORITHMS.md §5, less the caches lying in front of the
+//! sample: Ward's test, see [`in_front`]; a choice of ours, `rejectinfront false` leaves it out), ρ_hd over the BSDF's non-specular reflection lobes (exact
 //! for Lambertian lobes, 64 fixed stratified samples otherwise); purely specular and transmitting lobes
 //! get nothing from the caches. `output full` adds pbrt-v3's `directlighting` image (emission and direct
 //! light, with the scene's Sampler and PixelFilter) so the image compares with a path-traced one.
@@ -82,6 +83,8 @@ pub struct IrradianceCache {
     pub max_depth: u32,
     /// What the image holds.
     pub output: Output,
+    /// Whether a sample leaves out the caches that lie in front of it (see [`in_front`]).
+    pub reject_in_front: bool,
     rho_u: Vec<[f32; 2]>,
 }
 
@@ -108,7 +111,7 @@ impl IrradianceCache {
             })
             .map(|u| u.map(|v| v.min(1.0 - f32::EPSILON / 2.0)))
             .collect();
-        IrradianceCache { dirs, norm, max_depth, output, rho_u }
+        IrradianceCache { dirs, norm, max_depth, output, reject_in_front: true, rho_u }
     }
 
     /// E at `at` by the n² gathering paths; the luminance of each direction's radiance goes to
@@ -209,6 +212,21 @@ impl IrradianceCache {
     }
 }
 
+/// How far above a sample's tangent plane a cache may lie, as a fraction of its distance (tan ≈ 2.9°).
+const IN_FRONT_SLOPE: f32 = 0.05;
+
+/// Ward's "in front" test (Ward, Rubinstein & Clear 1988): whether the cache at `p` (normal `n`) lies in
+/// front of the sample `s`, above the plane through `s` with the mean of the two normals by more than
+/// [`IN_FRONT_SLOPE`] of their distance. Such a cache sits between the sample and the surfaces the sample
+/// sees, so its irradiance is not the sample's: the light fixture hung 0.02 below the Cornell box's
+/// ceiling carries caches that ALGORITHMS.md §5's Dist cannot tell from the ceiling's in the gap above it
+/// (same normal, 0.02 away), and they lit that unlit gap. Caches on the sample's plane, or on a sphere
+/// through it (seen from outside or inside: the mean normal makes the offset vanish), are never in front.
+fn in_front(s: &ShadingPoint, p: Vec3A, n: Vec3A) -> bool {
+    let to = p - s.p;
+    to.dot((s.n + n) * 0.5) > IN_FRONT_SLOPE * to.length()
+}
+
 /// ρ_hd(ω_o) over the non-specular reflection lobes of `bsdf`: the lobes that reflect cached irradiance.
 fn diffuse_reflectance(bsdf: &Bsdf, wo: Vec3A, u: &[[f32; 2]]) -> Spectrum {
     let wo_l = bsdf.to_local(wo);
@@ -238,6 +256,12 @@ impl Application for IrradianceCache {
             "indirect",
             "indirect: cached indirect light only; full: plus emission and directlighting per pixel",
         ),
+        Parameter::new(
+            "rejectinfront",
+            "bool",
+            "true",
+            "leave out caches in front of the sample's tangent plane (Ward's test); false: Eq. 5 alone",
+        ),
     ];
 
     const PAPER_CACHES: usize = 40_000;
@@ -263,7 +287,8 @@ impl Application for IrradianceCache {
             "full" => Output::Full,
             other => return Err(bad("output", format!("must be \"indirect\" or \"full\", got \"{other}\""))),
         };
-        Ok(IrradianceCache::new(gather as usize, max_depth as u32, output))
+        let reject_in_front = p.bool_or("rejectinfront", true)?;
+        Ok(IrradianceCache { reject_in_front, ..IrradianceCache::new(gather as usize, max_depth as u32, output) })
     }
 
     fn prepare<'s>(&self, scene: &'s Scene, warnings: &mut Warnings) -> Result<Lit<'s>> {
@@ -280,7 +305,12 @@ impl Application for IrradianceCache {
 
     fn settings(&self) -> Vec<(&'static str, serde_json::Value)> {
         let n = (self.dirs.len() as f64).sqrt().round() as u64;
-        vec![("gather", n.into()), ("maxdepth", self.max_depth.into()), ("output", self.output.name().into())]
+        vec![
+            ("gather", n.into()),
+            ("maxdepth", self.max_depth.into()),
+            ("output", self.output.name().into()),
+            ("rejectinfront", self.reject_in_front.into()),
+        ]
     }
 
     /// `output full`: pbrt-v3's `directlighting` with its defaults.
@@ -319,8 +349,17 @@ impl Application for IrradianceCache {
     ) -> [f32; 3] {
         let (mut e, mut wsum) = (Spectrum::ZERO, 0.0f32);
         for c in near {
-            e += c.weight * Spectrum::from_array(c.record.e);
-            wsum += c.weight;
+            if !self.reject_in_front || !in_front(s, c.p, c.n) {
+                e += c.weight * Spectrum::from_array(c.record.e);
+                wsum += c.weight;
+            }
+        }
+        if wsum <= 0.0 {
+            // Every cache is in front: blend them all, as ALGORITHMS.md §5 alone does.
+            for c in near {
+                e += c.weight * Spectrum::from_array(c.record.e);
+                wsum += c.weight;
+            }
         }
         if wsum <= 0.0 || e == Spectrum::ZERO {
             return [0.0; 3];
@@ -374,6 +413,43 @@ mod tests {
         let app = IrradianceCache::new(4, 3, Output::Indirect);
         let wo = Vec3A::new(0.3, 0.2, 0.9).normalize();
         assert_eq!(diffuse_reflectance(&b, wo, &app.rho_u), Spectrum::splat(0.4));
+    }
+
+    #[test]
+    fn caches_in_front_of_a_sample_are_those_above_its_tangent_plane() {
+        let s = ShadingPoint {
+            p: Vec3A::new(0.0, 2.0, 0.13),
+            p_error: Vec3A::ZERO,
+            n: -Vec3A::Y,
+            ng: -Vec3A::Y,
+            wo: -Vec3A::Y,
+            depth: 1.0,
+            dpdu: Vec3A::X,
+            uv: [0.0; 2],
+            material: 0,
+            area_light: None,
+            origin: None,
+        };
+        let down = -Vec3A::Y;
+        // The ceiling around the sample, near or far: never in front.
+        for p in [Vec3A::new(0.05, 2.0, 0.1), Vec3A::new(-0.7, 2.0, 0.9), s.p] {
+            assert!(!in_front(&s, p, down), "{p}");
+        }
+        // The light fixture 0.02 below the ceiling, a few centimetres away: in front.
+        assert!(in_front(&s, Vec3A::new(-0.058, 1.98, 0.133), down));
+        // A cache behind the sample's plane (a convex bend) is not.
+        assert!(!in_front(&s, Vec3A::new(0.3, 2.01, 0.13), Vec3A::new(0.05, -1.0, 0.0).normalize()));
+        // On a sphere seen from inside (radius 1, the sample at its lowest point), the mean normal makes the
+        // offset vanish at any distance: nothing is in front.
+        let c = Vec3A::new(0.0, 1.0, 0.13);
+        let on = |a: f32| {
+            (c + Vec3A::new(a.sin(), -a.cos(), 0.0), (c - (c + Vec3A::new(a.sin(), -a.cos(), 0.0))).normalize())
+        };
+        let up = ShadingPoint { p: c - Vec3A::Y, n: Vec3A::Y, ng: Vec3A::Y, ..s };
+        let (near, n_near) = on(0.05);
+        assert!(!in_front(&up, near, n_near));
+        let (far, n_far) = on(0.5);
+        assert!(!in_front(&up, far, n_far));
     }
 
     #[test]
