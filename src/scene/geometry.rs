@@ -105,7 +105,7 @@ impl Geometry {
         self.accel.occluded_hinted(ray, from, hint)
     }
 
-    /// [`Geometry::occluded_hinted`] that also tries the blocker `cache` remembers for the ray's direction
+    /// [`Geometry::occluded_hinted`] that also tries the blockers `cache` remembers for the ray's direction
     /// (see [`OccluderCache`]; the answer never depends on what `hint` or `cache` hold).
     #[inline]
     pub fn occluded_cached(

@@ -364,7 +364,7 @@ impl Accel {
         }
     }
 
-    /// [`Accel::occluded_hinted`] that also tries the blocker `cache` remembers for the ray's direction (from
+    /// [`Accel::occluded_hinted`] that also tries the blockers `cache` remembers for the ray's direction (from
     /// earlier points) before traversing, and remembers the one found. The answer is the same as
     /// [`Accel::occluded`]'s whatever `hint` and `cache` hold, so a cache may be kept across points and images.
     #[inline]
@@ -413,13 +413,17 @@ impl Accel {
         let on = cache.worth_trying();
         let cell = if on { direction_cell(ray.d) } else { 0 };
         if on {
-            let guess = cache.guess(cell);
-            if guess.top != 0 && guess != *hint {
+            // Most recent first; unused ways (top 0) come last.
+            for guess in cache.guess(cell).into_iter().take_while(|g| g.top != 0) {
                 // A guess from another point may be this ray's own surface: never test what `skip` leaves out.
-                let hit = !self.is_skipped(guess, &skip) && self.hint_blocks(ray, &shear, guess);
+                if guess == *hint || self.is_skipped(guess, &skip) {
+                    continue;
+                }
+                let hit = self.hint_blocks(ray, &shear, guess);
                 cache.record(hit);
                 if hit {
                     *hint = guess;
+                    cache.remember(cell, guess);
                     return true;
                 }
             }

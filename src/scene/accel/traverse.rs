@@ -120,12 +120,12 @@ impl TravRay {
 #[inline(always)]
 pub(super) fn intersect_node<const WIDE: bool>(node: &CwBvhNode, r: &TravRay, oct_inv4: u32) -> u32 {
     #[cfg(target_arch = "x86_64")]
-    let mut mask = if WIDE {
+    if WIDE {
         // SAFETY: WIDE is true only on paths entered after `has_avx2()` returned true.
-        unsafe { child_mask_avx2(node, r) }
-    } else {
-        child_mask(node, r)
-    };
+        return unsafe { hit_mask_avx2(node, r, oct_inv4) };
+    }
+    #[cfg(target_arch = "x86_64")]
+    let mut mask = child_mask(node, r);
     #[cfg(not(target_arch = "x86_64"))]
     let mut mask = child_mask(node, r);
     let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
@@ -190,11 +190,22 @@ fn child_mask(node: &CwBvhNode, r: &TravRay) -> u32 {
 
 /// [`child_mask`] for all 8 children at once. The same operations in the same order (multiply, then add;
 /// no fused multiply-add), so it visits exactly the nodes the SSE2 version visits and images do not depend
-/// on the CPU.
+/// on the CPU. (Traversal uses [`hit_mask_avx2`]; this is what the tests compare lane by lane.)
+#[cfg(all(test, target_arch = "x86_64"))]
+#[target_feature(enable = "avx2")]
+unsafe fn child_mask_avx2(node: &CwBvhNode, r: &TravRay) -> u32 {
+    use std::arch::x86_64::*;
+    // SAFETY: AVX2 is enabled in this function.
+    _mm256_movemask_ps(unsafe { child_hits_avx2(node, r) }) as u32
+}
+
+/// The 8-wide slab test, the same operations in the same order as [`child_mask`]'s (multiply, then add; no
+/// fused multiply-add), so it visits exactly the nodes the SSE2 version visits and images do not depend on
+/// the CPU: all ones in lane c when child c is hit.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn child_mask_avx2(node: &CwBvhNode, r: &TravRay) -> u32 {
+unsafe fn child_hits_avx2(node: &CwBvhNode, r: &TravRay) -> std::arch::x86_64::__m256 {
     use std::arch::x86_64::*;
     #[inline(always)]
     fn load(v: &[u8; 8]) -> __m256 {
@@ -212,7 +223,26 @@ unsafe fn child_mask_avx2(node: &CwBvhNode, r: &TravRay) -> u32 {
     let t1z = _mm256_add_ps(_mm256_mul_ps(load(q[5]), iz), oz);
     let tmin = _mm256_max_ps(_mm256_max_ps(t0x, t0y), _mm256_max_ps(t0z, _mm256_setzero_ps()));
     let tmax = _mm256_min_ps(_mm256_min_ps(t1x, t1y), _mm256_min_ps(t1z, _mm256_set1_ps(t_far)));
-    _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax)) as u32
+    _mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax)
+}
+
+/// [`intersect_node`]'s hit mask with the 8-wide box test and the per-child bits placed 8 lanes at once:
+/// each hit child's bits (`child_bits8`, byte c) shifted by its index (`bit_index8`, byte c), OR-ed together.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn hit_mask_avx2(node: &CwBvhNode, r: &TravRay, oct_inv4: u32) -> u32 {
+    use std::arch::x86_64::*;
+    // SAFETY: AVX2 is enabled in this function.
+    let hit = _mm256_castps_si256(unsafe { child_hits_avx2(node, r) });
+    let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
+    let bits = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(child_bits8 as i64));
+    let index = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(bit_index8 as i64));
+    let placed = _mm256_and_si256(_mm256_sllv_epi32(bits, index), hit);
+    let x = _mm_or_si128(_mm256_castsi256_si128(placed), _mm256_extracti128_si256::<1>(placed));
+    let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b01_00_11_10>(x));
+    let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b10_11_00_01>(x));
+    _mm_cvtsi128_si32(x) as u32
 }
 
 /// Whether the 8-wide node test can run (the standard library caches the CPU query).
@@ -314,6 +344,10 @@ mod tests {
             if has_avx2() {
                 // SAFETY: checked just above.
                 assert_eq!(narrow, unsafe { child_mask_avx2(node, &tr) }, "ray {i}");
+                for oct_inv4 in [0, 0x0404_0404, 0x0303_0303, 0x0707_0707] {
+                    let wide = intersect_node::<true>(node, &tr, oct_inv4);
+                    assert_eq!(wide, intersect_node::<false>(node, &tr, oct_inv4), "ray {i}, octant {oct_inv4:x}");
+                }
             }
         }
     }

@@ -52,31 +52,12 @@ fn intersect_k<const KX: usize, const KY: usize, const KZ: usize>(
     p: &[[f32; 3]; 3],
     t_max: f32,
 ) -> Option<(f32, f32, f32)> {
-    let [sx, sy, sz] = sh.s;
-    let o = [sh.o.x, sh.o.y, sh.o.z];
-    // Translate to the ray origin, permute, shear in x and y.
-    let tr = |q: &[f32; 3]| {
-        let z = q[KZ] - o[KZ];
-        [(q[KX] - o[KX]) + sx * z, (q[KY] - o[KY]) + sy * z, z]
-    };
-    let v = [tr(&p[0]), tr(&p[1]), tr(&p[2])];
-    let mut e0 = v[1][0] * v[2][1] - v[1][1] * v[2][0];
-    let mut e1 = v[2][0] * v[0][1] - v[2][1] * v[0][0];
-    let mut e2 = v[0][0] * v[1][1] - v[0][1] * v[1][0];
-    if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
-        // Edge function exactly zero: redo in double precision, as pbrt-v3 does.
-        let d = |a: [f32; 3], b: [f32; 3]| (a[0] as f64 * b[1] as f64 - a[1] as f64 * b[0] as f64) as f32;
-        e0 = d(v[1], v[2]);
-        e1 = d(v[2], v[0]);
-        e2 = d(v[0], v[1]);
-    }
-    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
-        return None;
-    }
+    let (v, [e0, e1, e2]) = edges::<KX, KY, KZ>(sh, p)?;
     let det = e0 + e1 + e2;
     if det == 0.0 {
         return None;
     }
+    let sz = sh.s[2];
     let z = [v[0][2] * sz, v[1][2] * sz, v[2][2] * sz];
     let t_scaled = e0 * z[0] + e1 * z[1] + e2 * z[2];
     if det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_max * det) {
@@ -101,6 +82,88 @@ fn intersect_k<const KX: usize, const KY: usize, const KZ: usize>(
         return None;
     }
     Some((t, e1 * inv_det, e2 * inv_det))
+}
+
+/// The vertices translated to the ray origin, permuted and sheared (z not yet scaled), and the three edge
+/// functions, or `None` when the edge functions have mixed signs (the ray misses).
+#[cfg(not(target_arch = "x86_64"))]
+#[inline(always)]
+fn edges<const KX: usize, const KY: usize, const KZ: usize>(
+    sh: &RayShear,
+    p: &[[f32; 3]; 3],
+) -> Option<([[f32; 3]; 3], [f32; 3])> {
+    let [sx, sy, _] = sh.s;
+    let o = [sh.o.x, sh.o.y, sh.o.z];
+    // Translate to the ray origin, permute, shear in x and y.
+    let tr = |q: &[f32; 3]| {
+        let z = q[KZ] - o[KZ];
+        [(q[KX] - o[KX]) + sx * z, (q[KY] - o[KY]) + sy * z, z]
+    };
+    let v = [tr(&p[0]), tr(&p[1]), tr(&p[2])];
+    let e = [
+        v[1][0] * v[2][1] - v[1][1] * v[2][0],
+        v[2][0] * v[0][1] - v[2][1] * v[0][0],
+        v[0][0] * v[1][1] - v[0][1] * v[1][0],
+    ];
+    edges_finish(v, e)
+}
+
+/// [`edges`] with the three vertices in the lanes of SSE registers: the same operations in the same order
+/// per vertex (subtract, multiply, add; no fused multiply-add), so the values are bit for bit the scalar
+/// ones, and a miss is told from the lane signs before anything is taken out of the registers.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn edges<const KX: usize, const KY: usize, const KZ: usize>(
+    sh: &RayShear,
+    p: &[[f32; 3]; 3],
+) -> Option<([[f32; 3]; 3], [f32; 3])> {
+    use std::arch::x86_64::*;
+    let o = [sh.o.x, sh.o.y, sh.o.z];
+    // SAFETY: SSE and SSE2 are part of the x86_64 baseline; only register arithmetic and stores to locals.
+    unsafe {
+        let axis = |k: usize| _mm_set_ps(0.0, p[2][k], p[1][k], p[0][k]);
+        let z = _mm_sub_ps(axis(KZ), _mm_set1_ps(o[KZ]));
+        let x = _mm_add_ps(_mm_sub_ps(axis(KX), _mm_set1_ps(o[KX])), _mm_mul_ps(_mm_set1_ps(sh.s[0]), z));
+        let y = _mm_add_ps(_mm_sub_ps(axis(KY), _mm_set1_ps(o[KY])), _mm_mul_ps(_mm_set1_ps(sh.s[1]), z));
+        // Lane i: v[i+1].x · v[i+2].y − v[i+1].y · v[i+2].x (indices mod 3), the scalar e_i.
+        const NEXT: i32 = 0b11_00_10_01;
+        const AFTER: i32 = 0b11_01_00_10;
+        let e = _mm_sub_ps(
+            _mm_mul_ps(_mm_shuffle_ps::<NEXT>(x, x), _mm_shuffle_ps::<AFTER>(y, y)),
+            _mm_mul_ps(_mm_shuffle_ps::<NEXT>(y, y), _mm_shuffle_ps::<AFTER>(x, x)),
+        );
+        let zero = _mm_setzero_ps();
+        let exact_zero = _mm_movemask_ps(_mm_cmpeq_ps(e, zero)) & 7;
+        if exact_zero == 0 {
+            let neg = _mm_movemask_ps(_mm_cmplt_ps(e, zero)) & 7;
+            let pos = _mm_movemask_ps(_mm_cmpgt_ps(e, zero)) & 7;
+            if neg != 0 && pos != 0 {
+                return None;
+            }
+        }
+        let mut lanes = [[0.0f32; 4]; 4];
+        for (l, r) in lanes.iter_mut().zip([x, y, z, e]) {
+            _mm_storeu_ps(l.as_mut_ptr(), r);
+        }
+        let [x, y, z, e] = lanes;
+        let v = [[x[0], y[0], z[0]], [x[1], y[1], z[1]], [x[2], y[2], z[2]]];
+        edges_finish(v, [e[0], e[1], e[2]])
+    }
+}
+
+/// The end of [`edges`]: an edge function of exactly zero is redone in double precision, as pbrt-v3 does,
+/// and mixed signs are a miss.
+#[inline(always)]
+fn edges_finish(v: [[f32; 3]; 3], mut e: [f32; 3]) -> Option<([[f32; 3]; 3], [f32; 3])> {
+    if e.contains(&0.0) {
+        let d = |a: [f32; 3], b: [f32; 3]| (a[0] as f64 * b[1] as f64 - a[1] as f64 * b[0] as f64) as f32;
+        e = [d(v[1], v[2]), d(v[2], v[0]), d(v[0], v[1])];
+    }
+    let [e0, e1, e2] = e;
+    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+        return None;
+    }
+    Some((v, e))
 }
 
 #[cfg(test)]
