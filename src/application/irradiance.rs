@@ -6,10 +6,11 @@
 //! by power (pbrt-v3's `EstimateDirect`, MIS between light and BSDF sampling), the path continues by BSDF
 //! sampling (also past the last light-sampling vertex when the bounce is specular, for the emission it
 //! finds, as pbrt-v3 `path` does), emitted radiance found after a specular bounce is added, and Russian
-//! roulette starts after the third bounce (pbrt-v3 `path`'s rule). `maxdepth` counts the vertices that sample a light, as pbrt-v2's
-//! `maxindirectdepth` does: with the per-pixel direct term of `output full` the light paths are those of
-//! pbrt-v3 `path` with `maxdepth + 1`. A ray that leaves the scene at the first hit brings no light (an
-//! infinite light's radiance at the cache is direct light, as in pbrt-v2's irradiance cache).
+//! roulette starts after the third bounce (pbrt-v3 `path`'s rule). `maxdepth` counts the vertices that
+//! sample a light, as pbrt-v2's `maxindirectdepth` does: with the per-pixel direct term of `output full`
+//! the light paths are those of pbrt-v3 `path` with `maxdepth + 1`. A ray that leaves the scene at the first
+//! hit brings no light (an infinite light's radiance at the cache is direct light, as in pbrt-v2's
+//! irradiance cache).
 //!
 //! E = π · Σ_k L_k cos θ_k / Σ_k cos θ_k (RGB): ALGORITHMS.md's (2π/n²) Σ_k L_k cos θ_k with the grid's own
 //! Σ cos θ_k in place of its limit n²/2, so that uniform radiance L gives exactly πL at any grid size (the
@@ -17,8 +18,9 @@
 //! its Σ cos θ_k. The record keeps E and, until placement is over, the luminance of
 //! every L_k, which is what two caches are compared by (Σ_k |ΔY|, §4.5.2). A sample is shaded as
 //! ρ_hd(ω_o)·E/π with E blended from its caches (ALGORITHMS.md §5, less the caches lying in front of the
-//! sample: Ward's test, see [`in_front`]; a choice of ours, `rejectinfront false` leaves it out), ρ_hd over the BSDF's non-specular reflection lobes (exact
-//! for Lambertian lobes, 64 fixed stratified samples otherwise); purely specular and transmitting lobes
+//! sample: Ward's test, see [`in_front`]; a choice of ours, `rejectinfront false` leaves it out), ρ_hd over
+//! the BSDF's non-specular reflection lobes (exact for Lambertian lobes, 64 fixed stratified samples
+//! otherwise); purely specular and transmitting lobes
 //! get nothing from the caches. `output full` adds pbrt-v3's `directlighting` image (emission and direct
 //! light, with the scene's Sampler and PixelFilter) so the image compares with a path-traced one.
 //!
