@@ -349,19 +349,17 @@ impl Application for IrradianceCache {
         _: &mut Rng,
         _: &mut RayCounters,
     ) -> [f32; 3] {
-        let (mut e, mut wsum) = (Spectrum::ZERO, 0.0f32);
-        for c in near {
-            if !self.reject_in_front || !in_front(s, c.p, c.n) {
-                e += c.weight * Spectrum::from_array(c.record.e);
-                wsum += c.weight;
-            }
-        }
+        let blend = |all: bool| {
+            near.iter()
+                .filter(|c| all || !self.reject_in_front || !in_front(s, c.p, c.n))
+                .fold((Spectrum::ZERO, 0.0f32), |(e, w), c| {
+                    (e + c.weight * Spectrum::from_array(c.record.e), w + c.weight)
+                })
+        };
+        let (mut e, mut wsum) = blend(false);
         if wsum <= 0.0 {
             // Every cache is in front: blend them all, as ALGORITHMS.md §5 alone does.
-            for c in near {
-                e += c.weight * Spectrum::from_array(c.record.e);
-                wsum += c.weight;
-            }
+            (e, wsum) = blend(true);
         }
         if wsum <= 0.0 || e == Spectrum::ZERO {
             return [0.0; 3];

@@ -124,9 +124,6 @@ pub(super) fn intersect_node<const WIDE: bool>(node: &CwBvhNode, r: &TravRay, oc
         // SAFETY: WIDE is true only on paths entered after `has_avx2()` returned true.
         return unsafe { hit_mask_avx2(node, r, oct_inv4) };
     }
-    #[cfg(target_arch = "x86_64")]
-    let mut mask = child_mask(node, r);
-    #[cfg(not(target_arch = "x86_64"))]
     let mut mask = child_mask(node, r);
     let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
     let mut hit_mask = 0u32;

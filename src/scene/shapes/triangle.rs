@@ -85,10 +85,21 @@ fn intersect_k<const KX: usize, const KY: usize, const KZ: usize>(
 }
 
 /// The vertices translated to the ray origin, permuted and sheared (z not yet scaled), and the three edge
-/// functions, or `None` when the edge functions have mixed signs (the ray misses).
+/// functions, or `None` when the edge functions have mixed signs (the ray misses). On x86_64 [`edges`] is
+/// the SSE version of this, which the tests hold to it bit for bit.
 #[cfg(not(target_arch = "x86_64"))]
 #[inline(always)]
 fn edges<const KX: usize, const KY: usize, const KZ: usize>(
+    sh: &RayShear,
+    p: &[[f32; 3]; 3],
+) -> Option<([[f32; 3]; 3], [f32; 3])> {
+    edges_scalar::<KX, KY, KZ>(sh, p)
+}
+
+/// [`edges`] one vertex at a time.
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+#[inline(always)]
+fn edges_scalar<const KX: usize, const KY: usize, const KZ: usize>(
     sh: &RayShear,
     p: &[[f32; 3]; 3],
 ) -> Option<([[f32; 3]; 3], [f32; 3])> {
@@ -169,6 +180,36 @@ fn edges_finish(v: [[f32; 3]; 3], mut e: [f32; 3]) -> Option<([[f32; 3]; 3], [f3
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_sse_edge_functions_are_the_scalar_ones_bit_for_bit() {
+        let mut rng = crate::sampling::Rng::new(21);
+        let mut v = |scale: f32| Vec3A::new(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5) * scale;
+        let bits = |r: Option<([[f32; 3]; 3], [f32; 3])>| {
+            r.map(|(v, e)| (v.map(|q| q.map(f32::to_bits)), e.map(f32::to_bits)))
+        };
+        let (mut hits, mut exact_zero) = (0, 0);
+        for i in 0..20000 {
+            // Every fourth triangle has a vertex on the ray's line, so an edge function is exactly zero.
+            let (o, d) = (v(4.0), v(2.0));
+            let a = v(4.0);
+            let p = [
+                a.to_array(),
+                (a + v(1.0)).to_array(),
+                if i % 4 == 0 { (o + d * 3.0).to_array() } else { (a + v(1.0)).to_array() },
+            ];
+            let sh = RayShear::new(o, d);
+            let (simd, scalar) = match sh.k[2] {
+                0 => (edges::<1, 2, 0>(&sh, &p), edges_scalar::<1, 2, 0>(&sh, &p)),
+                1 => (edges::<2, 0, 1>(&sh, &p), edges_scalar::<2, 0, 1>(&sh, &p)),
+                _ => (edges::<0, 1, 2>(&sh, &p), edges_scalar::<0, 1, 2>(&sh, &p)),
+            };
+            assert_eq!(bits(simd), bits(scalar), "triangle {i}");
+            hits += usize::from(simd.is_some());
+            exact_zero += usize::from(i % 4 == 0 && simd.is_some());
+        }
+        assert!(hits > 500 && exact_zero > 100, "both paths exercised: {hits} passes, {exact_zero} with a zero edge");
+    }
 
     const TRI: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
 
