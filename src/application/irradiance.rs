@@ -131,13 +131,14 @@ impl IrradianceCache {
         }
         let frame = Frame::generic(at.n);
         let mut sum = Spectrum::ZERO;
+        let mut bsdf = Bsdf::new(at.ng, at.n, Vec3A::X, 1.0);
         for (k, local) in self.dirs.iter().enumerate() {
             let w = frame.to_world(*local);
             if w.dot(at.ng) <= 0.0 {
                 continue;
             }
             let ray = Ray::new(offset_ray_origin(at.p, at.p_error, at.ng, w), w);
-            let l = self.incident(cx, ray, rng, rays);
+            let l = self.incident(cx, ray, &mut bsdf, rng, rays);
             if let Some(r) = radiance.as_deref_mut() {
                 r[k] = luminance(l);
             }
@@ -147,7 +148,8 @@ impl IrradianceCache {
     }
 
     /// Indirect radiance arriving along `ray` (see the module documentation for what counts).
-    fn incident(&self, cx: &Lit<'_>, mut ray: Ray, rng: &mut Rng, rays: &mut RayCounters) -> Spectrum {
+    /// `bsdf` is scratch storage the path refills at each vertex.
+    fn incident(&self, cx: &Lit<'_>, mut ray: Ray, bsdf: &mut Bsdf, rng: &mut Rng, rays: &mut RayCounters) -> Spectrum {
         let (scene, sh) = (cx.scene, &cx.shading);
         let mut l = Spectrum::ZERO;
         let mut beta = Spectrum::ONE;
@@ -170,13 +172,13 @@ impl IrradianceCache {
             if vertices >= self.max_depth {
                 break;
             }
-            let Some(bsdf) = sh.bsdf(&si) else {
+            if !sh.bsdf_into(&si, bsdf) {
                 let Some(next) = pass.past(&si, &ray) else { break };
                 ray = next;
                 continue;
-            };
+            }
             let wo = -ray.d;
-            let x = ShadePoint { si: &si, bsdf: &bsdf, wo };
+            let x = ShadePoint { si: &si, bsdf, wo };
             if bsdf.num_components(BxdfFlags::NON_SPECULAR) > 0
                 && let Some((light, pmf)) = cx.select.sample(rng.uniform())
             {

@@ -5,11 +5,14 @@
 //! A per-pixel reference for the cache applications; depends on `scene`, `shading` and the estimators in
 //! `render::lighting`.
 
+use glam::Vec3A;
+
 use crate::error::{Error, Result, Warnings};
 use crate::scene::Scene;
 use crate::scene::ray::Ray;
 use crate::scene::sampler::SamplerSpec;
 use crate::shading::Spectrum;
+use crate::shading::bsdf::Bsdf;
 use crate::shading::bxdf::BxdfFlags;
 use crate::shading::light::LightSelect;
 
@@ -88,13 +91,14 @@ impl<'a> DirectLighting<'a> {
         c: &mut RayCounters,
     ) -> Spectrum {
         let sh = &self.shading;
+        let mut bsdf = Bsdf::new(Vec3A::Z, Vec3A::Z, Vec3A::X, 1.0);
         for _ in 0..MAX_PASS_THROUGH {
             c.camera += 1;
             let Some(si) = scene.geometry.intersect(&ray) else { return sh.lights.le_escaped(&ray) };
-            let Some(bsdf) = sh.bsdf(&si) else {
+            if !sh.bsdf_into(&si, &mut bsdf) {
                 ray = si.spawn_ray(ray.d);
                 continue;
-            };
+            }
             let wo = -ray.d;
             let x = ShadePoint { si: &si, bsdf: &bsdf, wo };
             let mut l = sh.lights.emitted(&si, wo);

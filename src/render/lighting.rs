@@ -53,6 +53,13 @@ impl<'a> Shading<'a> {
     pub fn bsdf(&self, si: &SurfaceInteraction) -> Option<Bsdf> {
         self.materials.bsdf_with(si.material, si, &self.textures, self.multiple_lobes)
     }
+
+    /// [`Shading::bsdf`] written into `out`, which a path keeps across its vertices; false (and `out`
+    /// untouched) for a surface without material.
+    #[inline]
+    pub fn bsdf_into(&self, si: &SurfaceInteraction, out: &mut Bsdf) -> bool {
+        self.materials.bsdf_into(si.material, si, &self.textures, self.multiple_lobes, out)
+    }
 }
 
 /// Most surfaces without a material one path passes through before it gives up.

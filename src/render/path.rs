@@ -8,10 +8,13 @@
 //!
 //! A per-pixel reference for the cache applications; depends on `scene`, `shading` and `render::lighting`.
 
+use glam::Vec3A;
+
 use crate::error::{Error, Result, Warnings};
 use crate::scene::Scene;
 use crate::scene::ray::Ray;
 use crate::shading::Spectrum;
+use crate::shading::bsdf::Bsdf;
 use crate::shading::bxdf::BxdfFlags;
 use crate::shading::light::{LightSelect, SpatialSelect};
 
@@ -87,6 +90,7 @@ impl PixelIntegrator for Path<'_> {
         let mut eta_scale = 1.0f32;
         let mut bounces = 0u32;
         let mut pass = PassThrough::default();
+        let mut bsdf = Bsdf::new(Vec3A::Z, Vec3A::Z, Vec3A::X, 1.0);
         loop {
             c.camera += 1;
             let hit = scene.geometry.intersect(&ray);
@@ -101,7 +105,7 @@ impl PixelIntegrator for Path<'_> {
             if bounces >= self.max_depth {
                 break;
             }
-            let Some(bsdf) = sh.bsdf(&si) else {
+            if !sh.bsdf_into(&si, &mut bsdf) {
                 let Some(next) = pass.past(&si, &ray) else { break };
                 ray = next;
                 continue;

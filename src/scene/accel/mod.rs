@@ -649,12 +649,11 @@ mod tests {
         top.extend(quad(3.0, 1));
         top.push(BuildPrim { r: PrimRef::Quadric(0), verts: [[0.0; 3]; 3] });
         top.push(BuildPrim { r: PrimRef::Instance(0), verts: [[0.0; 3]; 3] });
-        let sphere = Quadric {
-            kind: QuadricKind::Sphere { radius: 0.5, z_min: -0.5, z_max: 0.5, phi_max: std::f64::consts::TAU },
-            world_from_object: Affine3A::from_translation(glam::Vec3::new(3.0, 0.0, 0.0)),
-            object_from_world: Affine3A::from_translation(glam::Vec3::new(-3.0, 0.0, 0.0)),
-            flip_normal: false,
-        };
+        let sphere = Quadric::new(
+            QuadricKind::Sphere { radius: 0.5, z_min: -0.5, z_max: 0.5, phi_max: std::f64::consts::TAU },
+            Affine3A::from_translation(glam::Vec3::new(3.0, 0.0, 0.0)),
+            false,
+        );
         let m = Affine3A::from_translation(glam::Vec3::new(-3.0, 0.0, 0.0));
         let inst = InstanceXf { object: 0, world_from_object: m, object_from_world: m.inverse() };
         let a = Accel::build(top, vec![quad(2.0, 0)], vec![inst], vec![sphere], vec![], vec![]);

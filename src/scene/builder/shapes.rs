@@ -86,12 +86,9 @@ impl SceneBuilder {
             }
             Built::Quadric(kind) => {
                 let [world_from_object, object_from_world] = placement(&xf, &n.name, loc)?;
-                let q = Quadric {
-                    kind,
-                    world_from_object,
-                    object_from_world,
-                    flip_normal: reverse ^ xf.swaps_handedness(),
-                };
+                let mut q = Quadric::new(kind, world_from_object, reverse ^ xf.swaps_handedness());
+                // The placement's own inverse (from the transform stack) is kept rather than recomputed.
+                q.object_from_world = object_from_world;
                 let (lo, hi) = q.world_bounds();
                 check_extent(lo, hi).map_err(|e| Error::at(loc, format!("Shape \"{}\": {e}", n.name)))?;
                 let id = self.add_quadric(q, ShapeInfo { material, area_light: None });

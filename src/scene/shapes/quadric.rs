@@ -11,7 +11,7 @@
 //!
 //! Depends only on the ray and glam, never on the scene builder or renderer.
 
-use glam::{Affine3A, DVec3, Vec3A};
+use glam::{Affine3A, DVec3, Mat3A, Vec3A};
 
 use crate::scene::ray::{Ray, gamma};
 
@@ -103,6 +103,8 @@ pub struct Quadric {
     pub world_from_object: Affine3A,
     /// World → object.
     pub object_from_world: Affine3A,
+    /// Object → world for normals: the inverse transpose of `world_from_object`'s linear part.
+    pub normal_from_object: Mat3A,
     /// Whether the outward normal is flipped (ReverseOrientation xor a handedness-swapping transform).
     pub flip_normal: bool,
 }
@@ -408,19 +410,25 @@ impl QuadricKind {
     }
 
     /// Outward normal, ∂p/∂u, (u, v) and the absolute error bound of an object-space hit point.
-    fn surface(&self, p: DVec3) -> (DVec3, DVec3, [f64; 2], DVec3) {
-        let phi = phi_of(p);
+    ///
+    /// Without `want_uv` the (u, v) returned are 0: sampling a point on a light needs only its position and
+    /// normal, and φ (an atan2) and the sphere's θ (three acos) were most of the cost of each sample.
+    fn surface(&self, p: DVec3, want_uv: bool) -> (DVec3, DVec3, [f64; 2], DVec3) {
+        let phi = if want_uv { phi_of(p) } else { 0.0 };
         match *self {
             QuadricKind::Sphere { radius: r, z_min, z_max, phi_max } => {
-                let theta = (p.z / r).clamp(-1.0, 1.0).acos();
-                let (th0, th1) = ((z_min / r).clamp(-1.0, 1.0).acos(), (z_max / r).clamp(-1.0, 1.0).acos());
-                let v = if th1 != th0 { (theta - th0) / (th1 - th0) } else { 0.0 };
+                let v = if want_uv {
+                    let theta = (p.z / r).clamp(-1.0, 1.0).acos();
+                    let (th0, th1) = ((z_min / r).clamp(-1.0, 1.0).acos(), (z_max / r).clamp(-1.0, 1.0).acos());
+                    if th1 != th0 { (theta - th0) / (th1 - th0) } else { 0.0 }
+                } else {
+                    0.0
+                };
                 let dpdu = DVec3::new(-phi_max * p.y, phi_max * p.x, 0.0);
                 (p / r, dpdu, [phi / phi_max, v], p.abs() * gamma(5) as f64)
             }
             QuadricKind::Disk { radius, inner_radius, phi_max, .. } => {
-                let rh = (p.x * p.x + p.y * p.y).sqrt();
-                let v = (radius - rh) / (radius - inner_radius);
+                let v = if want_uv { (radius - (p.x * p.x + p.y * p.y).sqrt()) / (radius - inner_radius) } else { 0.0 };
                 let dpdu = DVec3::new(-phi_max * p.y, phi_max * p.x, 0.0);
                 (DVec3::Z, dpdu, [phi / phi_max, v], DVec3::ZERO)
             }
@@ -578,13 +586,33 @@ impl Quadric {
         (t.v > 0.0 && t.v < t_max).then_some(QuadricHit { t: t.v, p: p.as_dvec3(), p_error })
     }
 
+    /// A quadric placed by `world_from_object`; `flip_normal` as the field says.
+    pub fn new(kind: QuadricKind, world_from_object: Affine3A, flip_normal: bool) -> Quadric {
+        let object_from_world = world_from_object.inverse();
+        let normal_from_object = world_from_object.matrix3.inverse().transpose();
+        Quadric { kind, world_from_object, object_from_world, normal_from_object, flip_normal }
+    }
+
     /// World-space surface data at a hit.
     pub fn surface(&self, hit: &QuadricHit) -> QuadricSurface {
-        let (n, dpdu, uv, err) = self.kind.surface(hit.p);
+        self.surface_at(hit, true)
+    }
+
+    /// World-space position, error bound and normal of the object-space surface point `p` (what sampling
+    /// a point on an emitting quadric needs: [`Quadric::surface`] without u, v and ∂p/∂u's use).
+    pub fn surface_point(&self, p: DVec3) -> (Vec3A, Vec3A, Vec3A) {
+        let s = self.surface_at(&QuadricHit { t: 0.0, p, p_error: Vec3A::ZERO }, false);
+        (s.p, s.p_error, s.n)
+    }
+
+    #[inline]
+    fn surface_at(&self, hit: &QuadricHit, want_uv: bool) -> QuadricSurface {
+        let (n, dpdu, uv, err) = self.kind.surface(hit.p, want_uv);
         let err = if hit.p_error == Vec3A::ZERO { err } else { hit.p_error.as_dvec3() };
         let (p, p_error) =
             transform_point_with_error(&self.world_from_object, hit.p.as_vec3().into(), err.as_vec3().into());
-        let mut n = transform_normal(&self.world_from_object, n.as_vec3().into());
+        // transform_normal with the inverse transpose made once, at construction.
+        let mut n = (self.normal_from_object * Vec3A::from(n.as_vec3())).normalize();
         if self.flip_normal {
             n = -n;
         }
@@ -643,7 +671,7 @@ mod tests {
     use std::f64::consts::TAU;
 
     fn placed(kind: QuadricKind, m: Affine3A) -> Quadric {
-        Quadric { kind, world_from_object: m, object_from_world: m.inverse(), flip_normal: false }
+        Quadric::new(kind, m, false)
     }
 
     #[test]

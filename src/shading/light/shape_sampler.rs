@@ -15,7 +15,7 @@ use glam::{DVec3, Mat3A, Vec3A};
 use super::area::SurfacePoint;
 use crate::sampling::warp::concentric_disk;
 use crate::scene::ray::{Ray, gamma, offset_ray_origin};
-use crate::scene::shapes::quadric::{Quadric, QuadricHit, QuadricKind};
+use crate::scene::shapes::quadric::{Quadric, QuadricKind};
 
 /// How points on one analytic emitter are drawn.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -156,8 +156,8 @@ impl ShapeSampler {
 
     /// The world point for object point `p_obj` of `q`, with its error bound and pbrt-v3's normal.
     fn world_point(q: &Quadric, p_obj: DVec3) -> SurfacePoint {
-        let s = q.surface(&QuadricHit { t: 0.0, p: p_obj, p_error: Vec3A::ZERO });
-        SurfacePoint { p: s.p, p_error: s.p_error, n: s.n }
+        let (p, p_error, n) = q.surface_point(p_obj);
+        SurfacePoint { p, p_error, n }
     }
 
     /// The cone about the sphere's centre seen from `p`: (unit axis toward the centre, distance,

@@ -74,7 +74,22 @@ impl Materials {
         textures: &Textures,
         allow_multiple_lobes: bool,
     ) -> Option<Bsdf> {
-        scatter::scatter(&self.compiled, id, &Hit { si, textures, multiple_lobes: allow_multiple_lobes }, 0)
+        let mut b = Bsdf::new(si.ng, si.ns, si.dpdu, 1.0);
+        self.bsdf_into(id, si, textures, allow_multiple_lobes, &mut b).then_some(b)
+    }
+
+    /// [`Materials::bsdf_with`] written into `out` (false, `out` untouched, for a material without a
+    /// BSDF): the form for inner loops, which keep one `Bsdf` per path.
+    #[inline]
+    pub fn bsdf_into(
+        &self,
+        id: u32,
+        si: &SurfaceInteraction,
+        textures: &Textures,
+        allow_multiple_lobes: bool,
+        out: &mut Bsdf,
+    ) -> bool {
+        scatter::scatter(&self.compiled, id, &Hit { si, textures, multiple_lobes: allow_multiple_lobes }, 0, out)
     }
 
     /// Materials defined in the scene file by type name, sorted by name (the built-in default matte is not

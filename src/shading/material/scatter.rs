@@ -43,8 +43,9 @@ impl Hit<'_> {
         if remap { roughness_to_alpha(r) } else { r }
     }
 
-    fn bsdf(&self, eta: f32) -> Bsdf {
-        Bsdf::new(self.si.ng, self.si.ns, self.si.dpdu, eta)
+    /// Empties `b` and gives it this hit's frame.
+    fn reset(&self, b: &mut Bsdf, eta: f32) {
+        b.reset(self.si.ng, self.si.ns, self.si.dpdu, eta);
     }
 }
 
@@ -52,13 +53,14 @@ fn is_black(s: Spectrum) -> bool {
     s == Spectrum::ZERO
 }
 
-/// The BSDF of material `id` at the hit (`None` for a material without one).
-pub fn scatter(materials: &[Compiled], id: u32, hit: &Hit, depth: u32) -> Option<Bsdf> {
+/// Fills `b` with the BSDF of material `id` at the hit; false (and `b` untouched) for a material without
+/// one. `b` is overwritten, not allocated: callers keep one per path (see [`Bsdf::reset`]).
+pub fn scatter(materials: &[Compiled], id: u32, hit: &Hit, depth: u32, b: &mut Bsdf) -> bool {
     let m = materials.get(id as usize).copied().unwrap_or(Compiled::None);
-    Some(match m {
-        Compiled::None => return None,
+    match m {
+        Compiled::None => return false,
         Compiled::Matte { kd, sigma } => {
-            let mut b = hit.bsdf(1.0);
+            hit.reset(b, 1.0);
             let r = hit.color(&kd);
             let s = hit.float(&sigma);
             let s = if s.is_nan() { 0.0 } else { s.clamp(0.0, 90.0) };
@@ -69,10 +71,9 @@ pub fn scatter(materials: &[Compiled], id: u32, hit: &Hit, depth: u32) -> Option
                     Bxdf::OrenNayar(OrenNayar::new(r, s))
                 });
             }
-            b
         }
         Compiled::Plastic { kd, ks, roughness, remap } => {
-            let mut b = hit.bsdf(1.0);
+            hit.reset(b, 1.0);
             let kd = hit.color(&kd);
             if !is_black(kd) {
                 b.add(Bxdf::Lambertian(LambertianReflection { r: kd }));
@@ -86,19 +87,17 @@ pub fn scatter(materials: &[Compiled], id: u32, hit: &Hit, depth: u32) -> Option
                     fresnel: Fresnel::Dielectric { eta_i: 1.5, eta_t: 1.0 },
                 }));
             }
-            b
         }
         Compiled::Substrate { kd, ks, urough, vrough, remap } => {
-            let mut b = hit.bsdf(1.0);
+            hit.reset(b, 1.0);
             let (d, s) = (hit.color(&kd), hit.color(&ks));
             if !is_black(d) || !is_black(s) {
                 let distribution = TrowbridgeReitz::new(hit.alpha(&urough, remap), hit.alpha(&vrough, remap));
                 b.add(Bxdf::FresnelBlend(FresnelBlend { rd: d, rs: s, distribution }));
             }
-            b
         }
         Compiled::Metal { eta, k, urough, vrough, remap } => {
-            let mut b = hit.bsdf(1.0);
+            hit.reset(b, 1.0);
             let distribution = TrowbridgeReitz::new(hit.alpha(&urough, remap), hit.alpha(&vrough, remap));
             // η = k = 0 would make the conductor term 0/0 at normal incidence; keep η a hair above 0.
             let eta = eta.eval(hit.si, hit.textures).max(Spectrum::splat(1e-4));
@@ -108,27 +107,24 @@ pub fn scatter(materials: &[Compiled], id: u32, hit: &Hit, depth: u32) -> Option
                 distribution,
                 fresnel: Fresnel::Conductor { eta, k },
             }));
-            b
         }
         Compiled::Mirror { kr } => {
-            let mut b = hit.bsdf(1.0);
+            hit.reset(b, 1.0);
             let r = hit.color(&kr);
             if !is_black(r) {
                 b.add(Bxdf::SpecularReflection(SpecularReflection { r, fresnel: Fresnel::NoOp }));
             }
-            b
         }
-        Compiled::Glass { kr, kt, eta, urough, vrough, remap } => glass(hit, kr, kt, eta, urough, vrough, remap),
+        Compiled::Glass { kr, kt, eta, urough, vrough, remap } => glass(hit, kr, kt, eta, urough, vrough, remap, b),
         Compiled::Uber { kd, ks, kr, kt, urough, vrough, eta, opacity, remap } => {
             let e = safe_ior(hit.float(&eta));
             let op = hit.color(&opacity);
             let t = clamp_spectrum(Spectrum::ONE - op);
-            let mut b;
             if !is_black(t) {
-                b = hit.bsdf(1.0);
+                hit.reset(b, 1.0);
                 b.add(Bxdf::SpecularTransmission(SpecularTransmission { t, eta_a: 1.0, eta_b: 1.0 }));
             } else {
-                b = hit.bsdf(e);
+                hit.reset(b, e);
             }
             let kd = op * hit.color(&kd);
             if !is_black(kd) {
@@ -156,29 +152,31 @@ pub fn scatter(materials: &[Compiled], id: u32, hit: &Hit, depth: u32) -> Option
             if !is_black(kt) {
                 b.add(Bxdf::SpecularTransmission(SpecularTransmission { t: kt, eta_a: 1.0, eta_b: e }));
             }
-            b
         }
         Compiled::Mix { amount, materials: [m1, m2] } => {
             // A part without a BSDF (`none`) adds no lobes (pbrt-v3 would dereference a null BSDF); lobes past
             // the eighth are dropped (pbrt-v3 would abort; `Materials::build` warns).
             let s1 = hit.color(&amount);
             let s2 = clamp_spectrum(Spectrum::ONE - s1);
-            let part = |id| if depth < MAX_MIX_DEPTH { scatter(materials, id, hit, depth + 1) } else { None };
-            let mut b = part(m1).unwrap_or_else(|| hit.bsdf(1.0));
+            let deeper = depth < MAX_MIX_DEPTH;
+            if !(deeper && scatter(materials, m1, hit, depth + 1, b)) {
+                hit.reset(b, 1.0);
+            }
             b.scale_all(s1);
-            if let Some(b2) = part(m2) {
+            // The second part needs storage of its own; mixes are rare enough for a local one.
+            let mut b2 = Bsdf::new(hit.si.ng, hit.si.ns, hit.si.dpdu, 1.0);
+            if deeper && scatter(materials, m2, hit, depth + 1, &mut b2) {
                 for (lobe, s) in b2.lobes() {
                     b.add_scaled(*lobe, s * s2);
                 }
             }
-            b
         }
         Compiled::Translucent { kd, ks, reflect, transmit, roughness, remap } => {
             let eta = 1.5;
-            let mut b = hit.bsdf(eta);
+            hit.reset(b, eta);
             let (r, t) = (hit.color(&reflect), hit.color(&transmit));
             if is_black(r) && is_black(t) {
-                return Some(b);
+                return true;
             }
             let kd = hit.color(&kd);
             if !is_black(kd) {
@@ -209,9 +207,9 @@ pub fn scatter(materials: &[Compiled], id: u32, hit: &Hit, depth: u32) -> Option
                     }));
                 }
             }
-            b
         }
-    })
+    }
+    true
 }
 
 fn glass(
@@ -222,18 +220,19 @@ fn glass(
     urough: FloatParam,
     vrough: FloatParam,
     remap: bool,
-) -> Bsdf {
+    b: &mut Bsdf,
+) {
     let eta = safe_ior(hit.float(&eta));
     let (ru, rv) = (safe_roughness(hit.float(&urough)), safe_roughness(hit.float(&vrough)));
     let (r, t) = (hit.color(&kr), hit.color(&kt));
-    let mut b = hit.bsdf(eta);
+    hit.reset(b, eta);
     if is_black(r) && is_black(t) {
-        return b;
+        return;
     }
     let specular = ru == 0.0 && rv == 0.0;
     if specular && hit.multiple_lobes {
         b.add(Bxdf::FresnelSpecular(FresnelSpecular { r, t, eta_a: 1.0, eta_b: eta }));
-        return b;
+        return;
     }
     let (au, av) = if remap { (roughness_to_alpha(ru), roughness_to_alpha(rv)) } else { (ru, rv) };
     let distribution = TrowbridgeReitz::new(au, av);
@@ -252,5 +251,4 @@ fn glass(
             Bxdf::MicrofacetTransmission(MicrofacetTransmission { t, distribution, eta_a: 1.0, eta_b: eta })
         });
     }
-    b
 }
