@@ -212,6 +212,7 @@ pub fn scatter(materials: &[Compiled], id: u32, hit: &Hit, depth: u32, b: &mut B
     true
 }
 
+#[allow(clippy::too_many_arguments)]
 fn glass(
     hit: &Hit,
     kr: super::param::SpecParam,
