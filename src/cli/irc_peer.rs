@@ -32,7 +32,7 @@ const SCENE: &str = "bitterli-cornell-box-v3";
 const PBRT_V2_SETTINGS: [(f32, u32); 7] =
     [(0.2, 4096), (0.5, 4096), (0.7, 4096), (0.9, 4096), (0.5, 256), (0.5, 1024), (0.5, 2048)];
 /// cachert's cache budgets.
-const BUDGETS: [usize; 4] = [1000, 2000, 4000, 8000];
+const BUDGETS: [usize; 5] = [1000, 2000, 3000, 4000, 8000];
 /// cachert's placements.
 const PLACEMENTS: [&str; 4] = ["vgc+dgs", "vgc", "im", "sd"];
 
