@@ -28,8 +28,9 @@ pub struct BsdfSample {
     pub sampled: BxdfFlags,
 }
 
-/// The scattering at one surface point: lobes in a shading frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The scattering at one surface point: lobes in a shading frame. Only the first `n` lobe slots are live
+/// (a [`Bsdf::reset`] leaves the old ones in place), so equality compares those.
+#[derive(Clone, Copy, Debug)]
 pub struct Bsdf {
     /// Relative index of refraction across the surface (1 for opaque materials).
     pub eta: f32,
@@ -40,6 +41,14 @@ pub struct Bsdf {
     n: usize,
     lobes: [Bxdf; MAX_LOBES],
     scales: [Spectrum; MAX_LOBES],
+}
+
+impl PartialEq for Bsdf {
+    fn eq(&self, o: &Bsdf) -> bool {
+        (self.eta, self.ns, self.ng, self.ss, self.ts, self.n) == (o.eta, o.ns, o.ng, o.ss, o.ts, o.n)
+            && self.lobes[..self.n] == o.lobes[..o.n]
+            && self.scales[..self.n] == o.scales[..o.n]
+    }
 }
 
 const EMPTY: Bxdf = Bxdf::Lambertian(LambertianReflection { r: Spectrum::ZERO });
@@ -225,5 +234,29 @@ impl Bsdf {
     pub fn rho_hd(&self, wo: Vec3A, u: &[[f32; 2]]) -> Spectrum {
         let wo_l = self.to_local(wo);
         self.lobes().map(|(b, s)| s * b.rho_hd(wo_l, u)).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_reset_bsdf_equals_a_new_one_whatever_its_old_lobes() {
+        let (ng, dpdu) = (Vec3A::Z, Vec3A::X);
+        let mut used = Bsdf::new(ng, ng, dpdu, 1.0);
+        used.add(Bxdf::Lambertian(LambertianReflection { r: Spectrum::splat(0.5) }));
+        used.add_scaled(Bxdf::Lambertian(LambertianReflection { r: Spectrum::ONE }), Spectrum::splat(0.25));
+        used.reset(ng, ng, dpdu, 1.5);
+        assert_eq!(used, Bsdf::new(ng, ng, dpdu, 1.5));
+        assert_eq!(used.lobes().count(), 0);
+        let lobe = Bxdf::Lambertian(LambertianReflection { r: Spectrum::splat(0.2) });
+        let (mut a, mut b) = (used, Bsdf::new(ng, ng, dpdu, 1.5));
+        a.add(lobe);
+        b.add(lobe);
+        assert_eq!(a, b);
+        let wo = Vec3A::new(0.3, 0.1, 0.9).normalize();
+        let wi = Vec3A::new(-0.2, 0.4, 0.8).normalize();
+        assert_eq!(a.f(wo, wi, BxdfFlags::ALL), b.f(wo, wi, BxdfFlags::ALL));
     }
 }

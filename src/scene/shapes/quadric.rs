@@ -598,8 +598,8 @@ impl Quadric {
         self.surface_at(hit, true)
     }
 
-    /// World-space position, error bound and normal of the object-space surface point `p` (what sampling
-    /// a point on an emitting quadric needs: [`Quadric::surface`] without u, v and ∂p/∂u's use).
+    /// World-space position, error bound and normal of the object-space surface point `p`: what sampling a
+    /// point on an emitting quadric needs, [`Quadric::surface`] without computing (u, v).
     pub fn surface_point(&self, p: DVec3) -> (Vec3A, Vec3A, Vec3A) {
         let s = self.surface_at(&QuadricHit { t: 0.0, p, p_error: Vec3A::ZERO }, false);
         (s.p, s.p_error, s.n)
