@@ -601,7 +601,13 @@ impl Quadric {
     /// World-space position, error bound and normal of the object-space surface point `p`: what sampling a
     /// point on an emitting quadric needs, [`Quadric::surface`] without computing (u, v).
     pub fn surface_point(&self, p: DVec3) -> (Vec3A, Vec3A, Vec3A) {
-        let s = self.surface_at(&QuadricHit { t: 0.0, p, p_error: Vec3A::ZERO }, false);
+        self.hit_point(&QuadricHit { t: 0.0, p, p_error: Vec3A::ZERO })
+    }
+
+    /// [`Quadric::surface_point`] of a hit (keeping the hit's own error bound where it has one): what a
+    /// light's density toward a direction that meets it needs.
+    pub fn hit_point(&self, hit: &QuadricHit) -> (Vec3A, Vec3A, Vec3A) {
+        let s = self.surface_at(hit, false);
         (s.p, s.p_error, s.n)
     }
 

@@ -252,8 +252,8 @@ impl<'a> Lights<'a> {
                 let q = &self.geometry.accel.quadrics[quadric as usize];
                 let r = (si.p, si.p_error, si.ng);
                 let h = q.intersect(&Ray::new(offset_ray_origin(si.p, si.p_error, si.ng, wi), wi))?;
-                let s = q.surface(&h);
-                let sp = SurfacePoint { p: s.p, p_error: s.p_error, n: s.n };
+                let (p, p_error, n) = q.hit_point(&h);
+                let sp = SurfacePoint { p, p_error, n };
                 let pdf = sampler.pdf_at(q, r, &sp);
                 (self.emission[area as usize].l(sp.n, -wi), pdf, spawn_ray_to(si, &sp))
             }

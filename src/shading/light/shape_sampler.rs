@@ -240,8 +240,8 @@ impl ShapeSampler {
         let ray = Ray::new(offset_ray_origin(p, p_error, n, wi), wi);
         match q.intersect(&ray) {
             Some(h) => {
-                let s = q.surface(&h);
-                self.pdf_at(q, r, &SurfacePoint { p: s.p, p_error: s.p_error, n: s.n })
+                let (p, p_error, n) = q.hit_point(&h);
+                self.pdf_at(q, r, &SurfacePoint { p, p_error, n })
             }
             None => 0.0,
         }
