@@ -83,7 +83,7 @@ impl MipMap {
     pub fn texel(&self, s: i64, t: i64) -> [f32; 3] {
         let (w, h) = (self.width as i64, self.height as i64);
         let (s, t) = match self.wrap {
-            Wrap::Repeat => (s.rem_euclid(w), t.rem_euclid(h)),
+            Wrap::Repeat => (repeat(s, w), repeat(t, h)),
             Wrap::Clamp => (s.clamp(0, w - 1), t.clamp(0, h - 1)),
             Wrap::Black => {
                 if s < 0 || s >= w || t < 0 || t >= h {
@@ -154,6 +154,13 @@ impl MipMap {
         let t = (st[1] * self.height as f32 - 0.5).clamp(-LIMIT, LIMIT);
         [if s.is_nan() { 0.0 } else { s }, if t.is_nan() { 0.0 } else { t }]
     }
+}
+
+/// `x.rem_euclid(n)` for n > 0, without the 64-bit division when x is already in [0, n) (most lookups; a
+/// bilinear lookup wraps eight coordinates, and the divisions were most of its cost).
+#[inline]
+fn repeat(x: i64, n: i64) -> i64 {
+    if (x as u64) < n as u64 { x } else { x.rem_euclid(n) }
 }
 
 /// pbrt-v3's `Lanczos(x, τ = 2)`: the windowed sinc, 0 beyond |x| = 1.
@@ -237,6 +244,15 @@ fn resample(w: usize, h: usize, img: &[[f32; 3]], w2: usize, h2: usize, wrap: Wr
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn repeat_is_rem_euclid() {
+        for n in [1i64, 2, 3, 7, 1024] {
+            for x in (-3 * n - 2..=3 * n + 2).chain([i64::MIN + 1, i64::MAX, 1 << 40, -(1 << 40)]) {
+                assert_eq!(repeat(x, n), x.rem_euclid(n), "{x} mod {n}");
+            }
+        }
+    }
 
     /// A 4×2 image whose texel (s, t) is (s, t, s + 10t).
     fn ramp(wrap: Wrap) -> MipMap {
