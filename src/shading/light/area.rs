@@ -78,13 +78,27 @@ fn triangle_normal(mesh: &TriangleMesh, tri: usize, n: Vec3A, b0: f32, b1: f32) 
 /// A point uniformly distributed by area on triangle `tri` for sample `u` (pdf = 1/area).
 #[inline]
 pub fn sample_triangle(mesh: &TriangleMesh, tri: usize, n: Vec3A, u: [f32; 2]) -> SurfacePoint {
+    let v = mesh.triangle(tri).map(Vec3A::from);
+    let (p, n, [b0, b1, b2]) = triangle_point(mesh, tri, v, n, u);
+    let abs_sum = (b0 * v[0]).abs() + (b1 * v[1]).abs() + (b2 * v[2]).abs();
+    SurfacePoint { p, p_error: abs_sum * gamma(6), n }
+}
+
+/// [`sample_triangle`] without the error bound, for a triangle whose vertices `v` the caller has fetched:
+/// the point, its emitting-side normal and its barycentrics.
+#[inline]
+pub fn triangle_point(
+    mesh: &TriangleMesh,
+    tri: usize,
+    v: [Vec3A; 3],
+    n: Vec3A,
+    u: [f32; 2],
+) -> (Vec3A, Vec3A, [f32; 3]) {
     let su0 = u[0].sqrt();
     let (b0, b1) = (1.0 - su0, u[1] * su0);
     let b2 = 1.0 - b0 - b1;
-    let [p0, p1, p2] = mesh.triangle(tri).map(Vec3A::from);
-    let p = b0 * p0 + b1 * p1 + b2 * p2;
-    let abs_sum = (b0 * p0).abs() + (b1 * p1).abs() + (b2 * p2).abs();
-    SurfacePoint { p, p_error: abs_sum * gamma(6), n: triangle_normal(mesh, tri, n, b0, b1) }
+    let p = b0 * v[0] + b1 * v[1] + b2 * v[2];
+    (p, triangle_normal(mesh, tri, n, b0, b1), [b0, b1, b2])
 }
 
 /// Where `ray` first crosses triangle `tri` (either side), with the emitting-side normal there.

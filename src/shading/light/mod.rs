@@ -26,7 +26,7 @@ use glam::Vec3A;
 use crate::scene::accel::PrimRef;
 use crate::scene::geometry::{Geometry, SurfaceInteraction};
 use crate::scene::ray::{Ray, offset_ray_origin};
-use crate::shading::Spectrum;
+use crate::shading::{Spectrum, luminance};
 
 pub use area::{Emission, SurfacePoint};
 pub use emit::{EmitterPoint, LightPathStart};
@@ -222,6 +222,40 @@ impl<'a> Lights<'a> {
             return None;
         }
         Some(LightSample { li, wi, pdf, shadow, is_delta: self.is_delta(light) })
+    }
+
+    /// For a triangle light: Σ over `samples` (reference point, light sample) of luminance(Li) / pdf, the light
+    /// sample's unoccluded contribution as [`Lights::sample_li`] makes it, skipping samples that carry
+    /// nothing or give a non-finite term (what pbrt-v3's spatial light distribution sums per voxel). The same
+    /// arithmetic as `sample_li`, less the error bound and shadow ray it has no use for, with the triangle
+    /// fetched once rather than per sample; `None` for every other kind of light.
+    pub(crate) fn triangle_unoccluded_sum(
+        &self,
+        light: usize,
+        samples: impl Iterator<Item = (Vec3A, [f32; 2])>,
+    ) -> Option<f32> {
+        let Kind::Triangle { area, mesh, tri, tri_area, n_face } = self.entries[light].kind else { return None };
+        let m = &self.geometry.meshes[mesh as usize];
+        let v = m.triangle(tri as usize).map(Vec3A::from);
+        let e = &self.emission[area as usize];
+        let mut sum = 0.0f32;
+        for (at, u) in samples {
+            let (p, n, _) = area::triangle_point(m, tri as usize, v, n_face, u);
+            let Some(f) = shape_sampler::solid_angle_factor(at, &SurfacePoint { p, p_error: Vec3A::ZERO, n }) else {
+                continue;
+            };
+            let pdf = f / tri_area;
+            let wi = (p - at).normalize();
+            let li = e.l(n, -wi);
+            if !(pdf > 0.0 && pdf.is_finite()) || li == Spectrum::ZERO || !wi.is_finite() {
+                continue;
+            }
+            let y = luminance(li) / pdf;
+            if y.is_finite() {
+                sum += y;
+            }
+        }
+        Some(sum)
     }
 
     /// Where a ray leaving `si` in direction `wi` meets light `light` itself, ignoring the rest of the scene:
