@@ -678,3 +678,53 @@ fn light_paths_carry_each_lights_emitted_flux() {
         assert!((mean / flux as f64 - 1.0).abs() < 0.01, "{name}: {mean} vs {flux}");
     }
 }
+
+/// `Lights::behind` lets `EstimateDirect` skip lights wholly behind a reflecting surface: it must never
+/// call a light behind when a sample of it lies on the plane's front side, and must say so for lights that
+/// are plainly behind (a triangle, a disk, a sphere and a point light under a floor, seen from above and
+/// from tilted planes).
+#[test]
+fn lights_called_behind_a_plane_have_every_sample_behind_it() {
+    let text = format!(
+        "WorldBegin\n{FLOOR}\
+         AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n\
+         Shape \"trianglemesh\" \"point P\" [-1 -1 -2  1 -1 -2  0 1 -3] \"integer indices\" [0 1 2]\nAttributeEnd\n\
+         AttributeBegin\nTranslate 3 0 -1\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" \"true\"\n\
+         Shape \"disk\" \"float radius\" [0.5]\nAttributeEnd\n\
+         AttributeBegin\nTranslate -3 2 -2\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n\
+         Shape \"sphere\" \"float radius\" [0.5]\nAttributeEnd\n\
+         LightSource \"point\" \"point from\" [0 -3 -0.5] \"rgb I\" [1 1 1]\n\
+         LightSource \"distant\" \"point from\" [0 0 -1] \"point to\" [0 0 0]\nWorldEnd\n"
+    );
+    let loaded = load(&text);
+    let lights = build_lights(&loaded.scene);
+    assert_eq!(lights.len(), 5);
+    let mut rng = Rng::new(7);
+    let (mut behind, mut front) = (0, 0);
+    for k in 0..200 {
+        let [x, y] = rng.uniform2();
+        let si = floor_point(&loaded.scene, 8.0 * x - 4.0, 8.0 * y - 4.0);
+        // The floor's own normal, its opposite, and tilted planes through the same point.
+        let tilt = Vec3A::new(rng.uniform() - 0.5, rng.uniform() - 0.5, 0.0) * (k % 4) as f32;
+        for n in [Vec3A::Z, -Vec3A::Z, (Vec3A::Z + tilt).normalize(), (-Vec3A::Z + tilt).normalize()] {
+            for j in 0..lights.len() {
+                if !lights.behind(j, si.p, n) {
+                    continue;
+                }
+                behind += 1;
+                for _ in 0..64 {
+                    if let Some(ls) = lights.sample_li(j, &si, rng.uniform2()) {
+                        front += usize::from(ls.wi.dot(n) >= 0.0);
+                    }
+                }
+            }
+        }
+    }
+    assert_eq!(front, 0, "a light called behind had samples in front");
+    // Every area light and the point light are below the floor: behind for n = +z at every point.
+    assert!(behind >= 200 * 4, "behind only {behind} times");
+    let si = floor_point(&loaded.scene, 0.0, 0.0);
+    let count = |n: Vec3A| (0..lights.len()).filter(|&j| lights.behind(j, si.p, n)).count();
+    // Four lights under the floor (the distant light never is behind); none of them behind the other side.
+    assert_eq!((count(Vec3A::Z), count(-Vec3A::Z)), (4, 0));
+}

@@ -133,6 +133,12 @@ impl Bsdf {
         self.ss * v.x + self.ts * v.y + self.ns * v.z
     }
 
+    /// Whether a lobe transmits (scatters to the side opposite the outgoing direction).
+    #[inline]
+    pub fn has_transmission(&self) -> bool {
+        self.lobes[..self.n].iter().any(|b| b.flags().intersects(BxdfFlags::TRANSMISSION))
+    }
+
     /// How many lobes match `flags`.
     pub fn num_components(&self, flags: BxdfFlags) -> usize {
         self.lobes[..self.n].iter().filter(|b| b.flags().matches(flags)).count()

@@ -214,7 +214,12 @@ impl<'a> Lights<'a> {
             return Ok(());
         }
         let samples = samples(props, &what, loc, warnings);
-        self.entries.push(Entry { kind, power, samples });
+        let bound = match kind {
+            Kind::Point(l) => (l.p, 0.0),
+            Kind::Spot(l) => (l.p, 0.0),
+            _ => (Vec3A::ZERO, f32::INFINITY),
+        };
+        self.entries.push(Entry { kind, power, samples, bound });
         Ok(())
     }
 
@@ -244,7 +249,10 @@ impl<'a> Lights<'a> {
                         self.slots.push(self.entries.len() as u32);
                         let n_face = super::area::face_normal(mesh, tri);
                         let kind = Kind::Triangle { area: a as u32, mesh: mi, tri: tri as u32, tri_area: area, n_face };
-                        self.entries.push(Entry { kind, power: em.power(area), samples });
+                        let v = mesh.triangle(tri).map(Vec3A::from);
+                        let c = (v[0] + v[1] + v[2]) / 3.0;
+                        let bound = (c, v.iter().map(|p| p.distance(c)).fold(0.0, f32::max));
+                        self.entries.push(Entry { kind, power: em.power(area), samples, bound });
                     }
                 }
                 ShapeId::Quadric(qi) => {
@@ -253,7 +261,9 @@ impl<'a> Lights<'a> {
                         Some(sampler) if !black && sampler.area() > 0.0 && sampler.area().is_finite() => {
                             self.slots.push(self.entries.len() as u32);
                             let kind = Kind::Shape { area: a as u32, quadric: qi, sampler };
-                            self.entries.push(Entry { kind, power: em.power(sampler.area()), samples });
+                            let (lo, hi) = q.world_bounds();
+                            let bound = ((lo + hi) * 0.5, (hi - lo).length() * 0.5);
+                            self.entries.push(Entry { kind, power: em.power(sampler.area()), samples, bound });
                         }
                         Some(_) => self.slots.push(NO_LIGHT),
                         None => {

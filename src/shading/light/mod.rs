@@ -89,6 +89,9 @@ struct Entry {
     kind: Kind,
     power: Spectrum,
     samples: u32,
+    /// A sphere (centre, radius) holding every point of the light: its position for point and spot lights
+    /// (radius 0), infinite radius for distant and infinite lights.
+    bound: (Vec3A, f32),
 }
 
 /// Marks a triangle or shape that emits but is not light-sampled (zero area or power, or a hyperboloid).
@@ -121,6 +124,17 @@ impl<'a> Lights<'a> {
     /// Whether there are no lights.
     pub fn is_empty(&self) -> bool {
         self.entries.is_empty()
+    }
+
+    /// Whether every point of light `light` lies below the plane through `p` with unit normal `n`, by a margin
+    /// far above rounding error. A BSDF without transmission lobes then gets nothing from it at `p` when `n`
+    /// is the side its outgoing direction is on: the light's samples are all on the other side (f = 0) and
+    /// none of its directions meet the light.
+    #[inline]
+    pub fn behind(&self, light: usize, p: Vec3A, n: Vec3A) -> bool {
+        let (c, r) = self.entries[light].bound;
+        let d = c - p;
+        d.dot(n) + r < -1e-4 * (d.abs().max_element() + r)
     }
 
     /// Whether light `light` is a delta light (point, spot or distant).
