@@ -19,7 +19,7 @@ use crate::scene::sampler::SamplerSpec;
 
 use super::params::IntegratorParams;
 use super::samples::PixelSamples;
-use super::{PixelIntegrator, RayCounters};
+use super::{PixelIntegrator, RayCounters, Scratch};
 
 /// Settings of the `ambientocclusion` integrator.
 ///
@@ -144,7 +144,7 @@ impl PixelIntegrator for AmbientOcclusion {
         scene: &Scene,
         mut ray: Ray,
         s: &mut PixelSamples,
-        scratch: &mut Vec<[f32; 2]>,
+        scratch: &mut Scratch,
         c: &mut RayCounters,
     ) -> [f32; 3] {
         for _ in 0..MAX_PASS_THROUGH {
@@ -154,10 +154,11 @@ impl PixelIntegrator for AmbientOcclusion {
                 ray = si.spawn_ray(ray.d);
                 continue;
             }
-            scratch.resize(self.n_samples as usize, [0.0; 2]);
-            s.array2d(scratch);
-            s.coherent(scratch);
-            let l = self.occlusion(scene, &si, ray.d, scratch, c);
+            let points = &mut scratch.points;
+            points.resize(self.n_samples as usize, [0.0; 2]);
+            s.array2d(points);
+            s.coherent(points);
+            let l = self.occlusion(scene, &si, ray.d, points, c);
             return [l; 3];
         }
         [0.0; 3]

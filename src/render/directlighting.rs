@@ -19,7 +19,7 @@ use crate::shading::light::LightSelect;
 use super::lighting::{ShadePoint, Shading, sample_all_lights, sample_one_light};
 use super::params::IntegratorParams;
 use super::samples::PixelSamples;
-use super::{PixelIntegrator, RayCounters};
+use super::{PixelIntegrator, RayCounters, Scratch};
 
 /// Most surfaces without a material a ray passes through before it gives up.
 const MAX_PASS_THROUGH: usize = 1024;
@@ -87,7 +87,7 @@ impl<'a> DirectLighting<'a> {
         mut ray: Ray,
         depth: u32,
         s: &mut PixelSamples,
-        scratch: &mut Vec<[f32; 2]>,
+        scratch: &mut Scratch,
         c: &mut RayCounters,
     ) -> Spectrum {
         let sh = &self.shading;
@@ -127,7 +127,7 @@ impl<'a> DirectLighting<'a> {
         lobe: BxdfFlags,
         depth: u32,
         s: &mut PixelSamples,
-        scratch: &mut Vec<[f32; 2]>,
+        scratch: &mut Scratch,
         c: &mut RayCounters,
     ) -> Spectrum {
         let u = s.get2d();
@@ -159,7 +159,7 @@ impl PixelIntegrator for DirectLighting<'_> {
         scene: &Scene,
         ray: Ray,
         s: &mut PixelSamples,
-        scratch: &mut Vec<[f32; 2]>,
+        scratch: &mut Scratch,
         c: &mut RayCounters,
     ) -> [f32; 3] {
         self.radiance(scene, ray, 0, s, scratch, c).to_array()

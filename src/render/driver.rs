@@ -13,7 +13,7 @@ use crate::scene::sampler::SamplerSpec;
 
 use super::film::{Film, FilmTile};
 use super::samples::PixelSamples;
-use super::{PixelIntegrator, RayCounters};
+use super::{PixelIntegrator, RayCounters, Scratch};
 
 const TILE: i32 = 16;
 
@@ -73,7 +73,7 @@ fn render_tile(
 ) -> (FilmTile, RayCounters) {
     let mut tile = FilmTile::new(*t, &scene.filter, image);
     let mut samples = PixelSamples::new(sampler, seed);
-    let mut scratch = Vec::new();
+    let mut scratch = Scratch::default();
     let mut counters = RayCounters::default();
     let max_lum = scene.film.max_sample_luminance;
     for y in t.min[1]..t.max[1] {

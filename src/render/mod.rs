@@ -22,11 +22,23 @@ use crate::error::{Error, Result, Warnings};
 use crate::image::Image;
 use crate::parse::{Named, ParamList};
 use crate::scene::Scene;
+use crate::scene::accel::OccluderHint;
 use crate::scene::ray::Ray;
 
 use samples::PixelSamples;
 
 pub use crate::scene::ray::RayCounters;
+
+/// Storage a thread's integrator reuses from one camera sample to the next (one per tile).
+#[derive(Clone, Debug, Default)]
+pub struct Scratch {
+    /// 2-D sample arrays (ambient-occlusion directions, light and BSDF samples).
+    pub points: Vec<[f32; 2]>,
+    /// Per light, the blocker of its last shadow ray (see `scene::accel::OccluderHint`): `directlighting`
+    /// with every light sampled at every vertex tests it first, as neighbouring points' shadow rays toward
+    /// the same light are often blocked by the same triangle. It never changes an answer.
+    pub light_hints: Vec<OccluderHint>,
+}
 
 /// An integrator that estimates the radiance along one camera ray.
 pub trait PixelIntegrator: Sync {
@@ -36,7 +48,7 @@ pub trait PixelIntegrator: Sync {
         scene: &Scene,
         ray: Ray,
         s: &mut PixelSamples,
-        scratch: &mut Vec<[f32; 2]>,
+        scratch: &mut Scratch,
         counters: &mut RayCounters,
     ) -> [f32; 3];
 }

@@ -22,7 +22,7 @@ use super::directlighting::read_max_depth;
 use super::lighting::{PassThrough, ShadePoint, Shading, sample_one_light};
 use super::params::IntegratorParams;
 use super::samples::PixelSamples;
-use super::{PixelIntegrator, RayCounters};
+use super::{PixelIntegrator, RayCounters, Scratch};
 
 /// pbrt-v3's `path` integrator.
 ///
@@ -80,7 +80,7 @@ impl PixelIntegrator for Path<'_> {
         scene: &Scene,
         mut ray: Ray,
         s: &mut PixelSamples,
-        _scratch: &mut Vec<[f32; 2]>,
+        _scratch: &mut Scratch,
         c: &mut RayCounters,
     ) -> [f32; 3] {
         let sh = &self.shading;
