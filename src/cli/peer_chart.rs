@@ -11,7 +11,7 @@ use plotters::prelude::*;
 use crate::error::{Error, Result};
 
 use super::irc_peer::PeerRow;
-use crate::experiment::chart::PALETTE;
+use crate::experiment::chart::{PALETTE, tick};
 
 /// Writes the chart of `rows` to `path`.
 pub fn write(rows: &[PeerRow], path: &Path) -> Result<()> {
@@ -42,7 +42,14 @@ pub fn write(rows: &[PeerRow], path: &Path) -> Result<()> {
             .y_label_area_size(60)
             .build_cartesian_2d((cpu_lo * 0.8..cpu_hi * 1.25).log_scale(), lo.min(hi * 0.5)..hi.max(1e-6))
             .map_err(|e| fail(e.to_string()))?;
-        chart.configure_mesh().x_desc("CPU seconds (log)").y_desc("RMSE").draw().map_err(|e| fail(e.to_string()))?;
+        chart
+            .configure_mesh()
+            .x_desc("CPU seconds (log)")
+            .y_desc("RMSE")
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
+            .draw()
+            .map_err(|e| fail(e.to_string()))?;
         for (i, name) in series.iter().enumerate() {
             let colour = PALETTE[i % PALETTE.len()];
             let mut pts: Vec<(f64, f64)> =

@@ -211,6 +211,17 @@ pub fn save(plot: &Plot, path: &Path) -> Result<()> {
     crate::image::write_rgb8_png(SIZE.0 as usize, SIZE.1 as usize, &rgb, &png)
 }
 
+/// An axis label: `v` to six significant digits without trailing zeros (plotters' own labels print a log
+/// axis' ticks in full, e.g. 0.30000000000000004).
+pub(crate) fn tick(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let decimals = (5 - v.abs().log10().floor() as i32).clamp(0, 15) as usize;
+    let s = format!("{v:.decimals$}");
+    if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
+}
+
 /// Draws the two panels of `plot` on `root`.
 fn draw<DB: DrawingBackend>(plot: &Plot, root: &DrawingArea<DB, Shift>) -> std::result::Result<(), String> {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
@@ -237,6 +248,8 @@ fn draw<DB: DrawingBackend>(plot: &Plot, root: &DrawingArea<DB, Shift>) -> std::
                     .configure_mesh()
                     .x_desc(plot.x_desc.as_str())
                     .y_desc(format!("{title} (log)"))
+                    .x_label_formatter(&|v| tick(*v))
+                    .y_label_formatter(&|v| tick(*v))
                     .draw()
                     .map_err(e)?;
                 for (i, (name, points)) in plot.series.iter().enumerate() {
@@ -277,6 +290,18 @@ fn draw<DB: DrawingBackend>(plot: &Plot, root: &DrawingArea<DB, Shift>) -> std::
 mod tests {
     use super::*;
     use crate::render::cache_driver::stats::{CacheStats, StageTimes};
+
+    #[test]
+    fn tick_labels_have_six_significant_digits_and_no_float_noise() {
+        assert_eq!(tick(0.30000000000000004), "0.3");
+        assert_eq!(tick(0.6000000000000001), "0.6");
+        assert_eq!(tick(0.00195), "0.00195");
+        assert_eq!(tick(1234.5), "1234.5");
+        assert_eq!(tick(20.0), "20");
+        assert_eq!(tick(-0.125), "-0.125");
+        assert_eq!(tick(1e-7), "0.0000001");
+        assert_eq!(tick(0.0), "0");
+    }
 
     fn row(placement: &str, caches: usize, seed: u64, rmse: f64, secs: f64) -> Row {
         let times = StageTimes { total: secs, ..Default::default() };
