@@ -150,7 +150,7 @@ pub fn estimate_direct_hinted(
         let f = x.bsdf.f(x.wo, ls.wi, flags) * ls.wi.dot(ns).abs();
         if f != Spectrum::ZERO {
             c.shadow += 1;
-            if !scene.geometry.accel.occluded_hinted(&ls.shadow, Some(x.si.origin), hint) {
+            if !scene.geometry.occluded_hinted(&ls.shadow, Some(x.si.origin), hint) {
                 if delta {
                     ld += f * ls.li / ls.pdf;
                 } else {
@@ -173,7 +173,7 @@ pub fn estimate_direct_hinted(
     // `Lights::hit_by`); a direction that meets it is kept when nothing else is in between.
     let Some(h) = sh.lights.hit_by(light, x.si, bs.wi) else { return ld };
     c.shadow += 1;
-    if scene.geometry.accel.occluded_hinted(&h.shadow, Some(x.si.origin), hint) {
+    if scene.geometry.occluded_hinted(&h.shadow, Some(x.si.origin), hint) {
         return ld;
     }
     ld + f * h.li * power_heuristic(bs.pdf, h.pdf) / bs.pdf
