@@ -105,6 +105,9 @@ impl PixelIntegrator for Path<'_> {
             if bounces >= self.max_depth {
                 break;
             }
+            if let Select::Spatial(v) = &self.select {
+                v.prefetch(si.p);
+            }
             if !sh.bsdf_into(&si, &mut bsdf) {
                 let Some(next) = pass.past(&si, &ray) else { break };
                 ray = next;

@@ -60,6 +60,11 @@ impl Distribution1D {
         first.saturating_sub(1).min(self.func.len() - 1)
     }
 
+    /// The step boundaries' cumulative probabilities: `count() + 1` values from 0 to 1.
+    pub fn cdf(&self) -> &[f32] {
+        &self.cdf
+    }
+
     /// A point x in [0, 1) for `u` in [0, 1), its density and its step (pbrt-v3 `SampleContinuous`).
     #[inline]
     pub fn sample_continuous(&self, u: f32) -> (f32, f32, usize) {
