@@ -890,3 +890,51 @@ fn assert_finite_everywhere(name: &str, b: &Bsdf) {
         assert!(rho.is_finite(), "{name}: ρ {rho:?} at {wo:?}");
     }
 }
+
+#[test]
+fn sampling_toward_a_target_keeps_exactly_the_samples_it_accepts() {
+    // `sample_f_toward` (EstimateDirect's BSDF sample, which looks at the direction before computing f and
+    // the pdf) must give, for every accepted direction, the sample `sample_f` gives, bit for bit, and nothing
+    // for the others; over every kind of lobe, alone and mixed, from both sides, for all and non-delta flags.
+    let tr = TrowbridgeReitz::new(0.3, 0.1);
+    let lobes = [
+        Bxdf::Lambertian(LambertianReflection { r: Spectrum::new(0.2, 0.5, 0.8) }),
+        Bxdf::LambertianTransmission(LambertianTransmission { t: Spectrum::splat(0.4) }),
+        Bxdf::OrenNayar(OrenNayar::new(white(), 20.0)),
+        Bxdf::MicrofacetReflection(MicrofacetReflection { r: white(), distribution: tr, fresnel: conductor() }),
+        Bxdf::MicrofacetTransmission(MicrofacetTransmission { t: white(), distribution: tr, eta_a: 1.0, eta_b: 1.5 }),
+        Bxdf::FresnelBlend(FresnelBlend { rd: white(), rs: Spectrum::splat(0.04), distribution: tr }),
+        Bxdf::SpecularReflection(SpecularReflection { r: white(), fresnel: Fresnel::NoOp }),
+        Bxdf::SpecularTransmission(SpecularTransmission { t: white(), eta_a: 1.0, eta_b: 1.5 }),
+        Bxdf::FresnelSpecular(FresnelSpecular { r: white(), t: white(), eta_a: 1.0, eta_b: 1.5 }),
+    ];
+    let mut bsdfs: Vec<Bsdf> = lobes.iter().map(|l| bsdf_of(&[*l], 1.5)).collect();
+    bsdfs.push(bsdf_of(&[lobes[0], lobes[3], lobes[6]], 1.5));
+    bsdfs.push(bsdf_of(&[lobes[2], lobes[4], lobes[5]], 1.5));
+    let keep = |wi: Vec3A| (wi.x > 0.1).then_some(wi);
+    let mut rng = Rng::keyed(11, 5, 0);
+    let (mut kept, mut refused) = (0, 0);
+    for (k, b) in bsdfs.iter().enumerate() {
+        for theta in [20.0, 75.0, 160.0] {
+            let wo = dir(theta, 40.0);
+            for flags in [BxdfFlags::ALL, BxdfFlags::NON_SPECULAR] {
+                for _ in 0..2000 {
+                    let u = rng.uniform2();
+                    let plain = b.sample_f(wo, u, flags);
+                    let toward = b.sample_f_toward(wo, u, flags, keep);
+                    match plain.filter(|s| s.wi.x > 0.1) {
+                        Some(s) => {
+                            kept += 1;
+                            assert_eq!(toward, Some((s, s.wi)), "bsdf {k} θ {theta} u {u:?}");
+                        }
+                        None => {
+                            refused += usize::from(plain.is_some());
+                            assert_eq!(toward, None, "bsdf {k} θ {theta} u {u:?}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(kept > 10_000 && refused > 10_000, "kept {kept}, refused {refused}");
+}

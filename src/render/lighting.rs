@@ -163,15 +163,16 @@ pub fn estimate_direct_hinted(
     if delta {
         return ld;
     }
-    let Some(bs) = x.bsdf.sample_f(x.wo, u_scatter, flags) else { return ld };
+    // The specular lobes are excluded above, so the sample is weighted against the light's density. The
+    // light is asked first, as soon as the direction is drawn: most directions miss a small light and need
+    // neither the BSDF's value and density nor any traversal (see `Lights::hit_by`); a direction that meets
+    // it is kept when nothing else is in between.
+    let toward_light = |wi| sh.lights.hit_by(light, x.si, wi);
+    let Some((bs, h)) = x.bsdf.sample_f_toward(x.wo, u_scatter, flags, toward_light) else { return ld };
     let f = bs.f * bs.wi.dot(ns).abs();
     if f == Spectrum::ZERO || bs.pdf <= 0.0 {
         return ld;
     }
-    // The specular lobes are excluded above, so the sample is weighted against the light's density. The
-    // light is asked first: most directions miss a small light and need no traversal at all (see
-    // `Lights::hit_by`); a direction that meets it is kept when nothing else is in between.
-    let Some(h) = sh.lights.hit_by(light, x.si, bs.wi) else { return ld };
     c.shadow += 1;
     if scene.geometry.occluded_hinted(&h.shadow, Some(x.si.origin), hint) {
         return ld;

@@ -170,7 +170,23 @@ impl Bsdf {
     /// pbrt-v3's `BSDF::Sample_f`: picks one matching lobe with `u[0]` (then remapped to [0,1)), samples it,
     /// and for a non-delta lobe returns f and the pdf over all matching lobes. `None` when nothing matches or
     /// the lobe produced no direction. The returned f may still be black.
+    #[inline]
     pub fn sample_f(&self, wo: Vec3A, u: [f32; 2], flags: BxdfFlags) -> Option<BsdfSample> {
+        self.sample_f_toward(wo, u, flags, |_| Some(())).map(|(s, ())| s)
+    }
+
+    /// [`Bsdf::sample_f`] for a caller that only wants directions `keep` accepts (returning what it found
+    /// there): a direction it refuses gives `None`, and a non-delta lobe's direction is shown to `keep`
+    /// before f and the pdf are computed, so the refused ones cost only the drawing. The samples that come
+    /// back are exactly those of `sample_f`.
+    #[inline]
+    pub fn sample_f_toward<T>(
+        &self,
+        wo: Vec3A,
+        u: [f32; 2],
+        flags: BxdfFlags,
+        keep: impl FnOnce(Vec3A) -> Option<T>,
+    ) -> Option<(BsdfSample, T)> {
         let matching = self.num_components(flags);
         if matching == 0 {
             return None;
@@ -183,14 +199,22 @@ impl Bsdf {
         if wo_l.z == 0.0 {
             return None;
         }
-        let s = lobe.sample_f(wo_l, u_remapped)?;
+        let specular = lobe.flags().intersects(BxdfFlags::SPECULAR);
+        let (s, wi, kept) = if specular {
+            let s = lobe.sample_f(wo_l, u_remapped)?;
+            let wi = self.to_world(s.wi);
+            (s, wi, keep(wi)?)
+        } else {
+            let d = lobe.draw(wo_l, u_remapped)?;
+            let wi = self.to_world(d.wi);
+            let kept = keep(wi)?;
+            (lobe.complete(wo_l, d)?, wi, kept)
+        };
         if s.pdf.is_nan() || s.pdf <= 0.0 {
             return None;
         }
-        let wi = self.to_world(s.wi);
         let mut pdf = s.pdf;
         let mut f = self.scales[idx] * s.f;
-        let specular = lobe.flags().intersects(BxdfFlags::SPECULAR);
         if !specular && matching > 1 {
             for (j, b) in self.lobes[..self.n].iter().enumerate() {
                 if j != idx && b.flags().matches(flags) {
@@ -214,7 +238,7 @@ impl Bsdf {
                 f = self.f_local(wo_l, s.wi, reflect, flags);
             }
         }
-        Some(BsdfSample { f, wi, pdf, sampled: s.sampled })
+        Some((BsdfSample { f, wi, pdf, sampled: s.sampled }, kept))
     }
 
     /// Density of [`Bsdf::sample_f`] producing `wi`: the mean of the matching lobes' densities (delta lobes

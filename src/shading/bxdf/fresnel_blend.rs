@@ -7,10 +7,10 @@ use std::f32::consts::PI;
 
 use glam::Vec3A;
 
+use super::Drawn;
 use super::distribution::TrowbridgeReitz;
 use super::lambert::cosine_sample;
 use super::local::{abs_cos_theta, reflect, same_hemisphere};
-use super::{BxdfFlags, BxdfSample};
 use crate::shading::Spectrum;
 
 /// The largest f32 below 1 (pbrt-v3's `OneMinusEpsilon`).
@@ -55,7 +55,7 @@ impl FresnelBlend {
 
     /// Half the samples cosine-distributed, half about visible microfacet normals.
     #[inline]
-    pub fn sample_f(&self, wo: Vec3A, u: [f32; 2]) -> Option<BxdfSample> {
+    pub fn draw(&self, wo: Vec3A, u: [f32; 2]) -> Option<Drawn> {
         let wi = if u[0] < 0.5 {
             cosine_sample(wo, [(2.0 * u[0]).min(ONE_MINUS_EPSILON), u[1]], true).0
         } else {
@@ -66,8 +66,7 @@ impl FresnelBlend {
             }
             wi
         };
-        let pdf = self.pdf(wo, wi);
-        (pdf > 0.0).then(|| BxdfSample { f: self.f(wo, wi), wi, pdf, sampled: BxdfFlags::GLOSSY_REFLECTION })
+        Some(Drawn::new(wi))
     }
 
     /// The average of the two sampling densities.

@@ -8,7 +8,6 @@ use std::f32::consts::FRAC_1_PI;
 use glam::Vec3A;
 
 use super::local::{abs_cos_theta, same_hemisphere};
-use super::{BxdfFlags, BxdfSample};
 use crate::sampling::warp::cosine_hemisphere;
 use crate::shading::Spectrum;
 
@@ -42,14 +41,6 @@ impl LambertianReflection {
     pub fn f(&self, _wo: Vec3A, _wi: Vec3A) -> Spectrum {
         self.r * FRAC_1_PI
     }
-
-    /// Cosine-sampled reflection.
-    #[inline]
-    pub fn sample_f(&self, wo: Vec3A, u: [f32; 2]) -> Option<BxdfSample> {
-        let (wi, _) = cosine_sample(wo, u, true);
-        let pdf = cosine_pdf(wo, wi);
-        (pdf > 0.0).then(|| BxdfSample { f: self.f(wo, wi), wi, pdf, sampled: BxdfFlags::DIFFUSE_REFLECTION })
-    }
 }
 
 /// Ideal diffuse transmission with transmittance `t`.
@@ -64,14 +55,6 @@ impl LambertianTransmission {
     #[inline]
     pub fn f(&self, _wo: Vec3A, _wi: Vec3A) -> Spectrum {
         self.t * FRAC_1_PI
-    }
-
-    /// Cosine-sampled transmission to the other side.
-    #[inline]
-    pub fn sample_f(&self, wo: Vec3A, u: [f32; 2]) -> Option<BxdfSample> {
-        let (wi, _) = cosine_sample(wo, u, false);
-        let pdf = self.pdf(wo, wi);
-        (pdf > 0.0).then(|| BxdfSample { f: self.f(wo, wi), wi, pdf, sampled: BxdfFlags::DIFFUSE_TRANSMISSION })
     }
 
     /// Cosine density on the side opposite `wo`.

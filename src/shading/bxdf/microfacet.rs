@@ -5,10 +5,10 @@
 
 use glam::Vec3A;
 
+use super::Drawn;
 use super::distribution::TrowbridgeReitz;
 use super::fresnel::{Fresnel, fr_dielectric};
 use super::local::{abs_cos_theta, cos_theta, face_forward, reflect, refract, same_hemisphere};
-use super::{BxdfFlags, BxdfSample};
 use crate::shading::Spectrum;
 
 /// Glossy reflection: R·D·G·F / (4 cos θo cos θi).
@@ -36,16 +36,13 @@ impl MicrofacetReflection {
         self.r * self.distribution.d(wh) * self.distribution.g(wo, wi) * f / (4.0 * cos_i * cos_o)
     }
 
-    /// A direction reflected about a visible microfacet normal.
+    /// A direction reflected about a visible microfacet normal (its density is that normal's, see
+    /// [`Bxdf::complete`](super::Bxdf::complete)).
     #[inline]
-    pub fn sample_f(&self, wo: Vec3A, u: [f32; 2]) -> Option<BxdfSample> {
+    pub fn draw(&self, wo: Vec3A, u: [f32; 2]) -> Option<Drawn> {
         let wh = self.distribution.sample_facing_wh(wo, u)?;
         let wi = reflect(wo, wh);
-        if !same_hemisphere(wo, wi) {
-            return None;
-        }
-        let pdf = self.distribution.reflected_pdf(wo, wh);
-        (pdf > 0.0).then(|| BxdfSample { f: self.f(wo, wi), wi, pdf, sampled: BxdfFlags::GLOSSY_REFLECTION })
+        same_hemisphere(wo, wi).then_some(Drawn { wi, wh })
     }
 
     /// Density of [`MicrofacetReflection::sample_f`].
@@ -112,12 +109,10 @@ impl MicrofacetTransmission {
 
     /// A direction refracted through a visible microfacet normal (`None` at total internal reflection).
     #[inline]
-    pub fn sample_f(&self, wo: Vec3A, u: [f32; 2]) -> Option<BxdfSample> {
+    pub fn draw(&self, wo: Vec3A, u: [f32; 2]) -> Option<Drawn> {
         let wh = self.distribution.sample_facing_wh(wo, u)?;
         let eta = if cos_theta(wo) > 0.0 { self.eta_a / self.eta_b } else { self.eta_b / self.eta_a };
-        let wi = refract(wo, wh, eta)?;
-        let pdf = self.pdf(wo, wi);
-        (pdf > 0.0).then(|| BxdfSample { f: self.f(wo, wi), wi, pdf, sampled: BxdfFlags::GLOSSY_TRANSMISSION })
+        Some(Drawn::new(refract(wo, wh, eta)?))
     }
 
     /// Density of [`MicrofacetTransmission::sample_f`].

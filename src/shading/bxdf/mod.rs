@@ -112,6 +112,27 @@ pub struct BxdfSample {
     pub sampled: BxdfFlags,
 }
 
+/// A direction drawn by a lobe that is not a delta distribution (local frame), before its value and density
+/// are computed: [`Bxdf::complete`] turns it into the [`BxdfSample`] that [`Bxdf::sample_f`] returns. A
+/// caller that only wants directions meeting something (a light, in `EstimateDirect`) looks at `wi` first
+/// and skips the value and density of the directions it has no use for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Drawn {
+    /// The incident direction.
+    pub wi: Vec3A,
+    /// The microfacet normal it was reflected about (microfacet reflection, whose density is that of
+    /// the sampled normal; zero for the other lobes).
+    wh: Vec3A,
+}
+
+impl Drawn {
+    /// A direction drawn without a microfacet normal.
+    #[inline]
+    pub(crate) fn new(wi: Vec3A) -> Drawn {
+        Drawn { wi, wh: Vec3A::ZERO }
+    }
+}
+
 /// One lobe of a BSDF.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Bxdf {
@@ -181,16 +202,40 @@ impl Bxdf {
     #[inline]
     pub fn sample_f(&self, wo: Vec3A, u: [f32; 2]) -> Option<BxdfSample> {
         match self {
-            Bxdf::Lambertian(b) => b.sample_f(wo, u),
-            Bxdf::LambertianTransmission(b) => b.sample_f(wo, u),
-            Bxdf::OrenNayar(b) => b.sample_f(wo, u),
-            Bxdf::MicrofacetReflection(b) => b.sample_f(wo, u),
-            Bxdf::MicrofacetTransmission(b) => b.sample_f(wo, u),
-            Bxdf::FresnelBlend(b) => b.sample_f(wo, u),
             Bxdf::SpecularReflection(b) => b.sample_f(wo, u),
             Bxdf::SpecularTransmission(b) => b.sample_f(wo, u),
             Bxdf::FresnelSpecular(b) => b.sample_f(wo, u),
+            _ => self.complete(wo, self.draw(wo, u)?),
         }
+    }
+
+    /// The direction [`Bxdf::sample_f`] draws for `wo` from `u`, without its value and density (`None` when
+    /// the lobe draws nothing, and always for the delta lobes, which only [`Bxdf::sample_f`] samples).
+    #[inline]
+    pub fn draw(&self, wo: Vec3A, u: [f32; 2]) -> Option<Drawn> {
+        match self {
+            Bxdf::Lambertian(_) | Bxdf::OrenNayar(_) => Some(Drawn::new(lambert::cosine_sample(wo, u, true).0)),
+            Bxdf::LambertianTransmission(_) => Some(Drawn::new(lambert::cosine_sample(wo, u, false).0)),
+            Bxdf::MicrofacetReflection(b) => b.draw(wo, u),
+            Bxdf::MicrofacetTransmission(b) => b.draw(wo, u),
+            Bxdf::FresnelBlend(b) => b.draw(wo, u),
+            Bxdf::SpecularReflection(_) | Bxdf::SpecularTransmission(_) | Bxdf::FresnelSpecular(_) => None,
+        }
+    }
+
+    /// The sample [`Bxdf::sample_f`] returns for the direction `d` that [`Bxdf::draw`] drew for `wo`: its
+    /// value and density (`None` when the density is 0).
+    #[inline]
+    pub fn complete(&self, wo: Vec3A, d: Drawn) -> Option<BxdfSample> {
+        let (pdf, sampled) = match self {
+            Bxdf::Lambertian(_) | Bxdf::OrenNayar(_) => (lambert::cosine_pdf(wo, d.wi), BxdfFlags::DIFFUSE_REFLECTION),
+            Bxdf::LambertianTransmission(b) => (b.pdf(wo, d.wi), BxdfFlags::DIFFUSE_TRANSMISSION),
+            Bxdf::MicrofacetReflection(b) => (b.distribution.reflected_pdf(wo, d.wh), BxdfFlags::GLOSSY_REFLECTION),
+            Bxdf::MicrofacetTransmission(b) => (b.pdf(wo, d.wi), BxdfFlags::GLOSSY_TRANSMISSION),
+            Bxdf::FresnelBlend(b) => (b.pdf(wo, d.wi), BxdfFlags::GLOSSY_REFLECTION),
+            Bxdf::SpecularReflection(_) | Bxdf::SpecularTransmission(_) | Bxdf::FresnelSpecular(_) => return None,
+        };
+        (pdf > 0.0).then(|| BxdfSample { f: self.f(wo, d.wi), wi: d.wi, pdf, sampled })
     }
 
     /// Density of [`Bxdf::sample_f`] producing `wi` (0 for delta lobes).

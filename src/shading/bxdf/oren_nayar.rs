@@ -7,9 +7,8 @@ use std::f32::consts::FRAC_1_PI;
 
 use glam::Vec3A;
 
-use super::lambert::{cosine_pdf, cosine_sample};
 use super::local::{abs_cos_theta, cos_phi, sin_phi, sin_theta};
-use super::{BxdfFlags, BxdfSample};
+
 use crate::shading::Spectrum;
 
 /// Oren–Nayar reflection with albedo `r` and the model's A, B.
@@ -46,13 +45,5 @@ impl OrenNayar {
             (sin_i, sin_o / abs_cos_theta(wo))
         };
         self.r * FRAC_1_PI * (self.a + self.b * max_cos * sin_alpha * tan_beta)
-    }
-
-    /// Cosine-sampled reflection.
-    #[inline]
-    pub fn sample_f(&self, wo: Vec3A, u: [f32; 2]) -> Option<BxdfSample> {
-        let (wi, _) = cosine_sample(wo, u, true);
-        let pdf = cosine_pdf(wo, wi);
-        (pdf > 0.0).then(|| BxdfSample { f: self.f(wo, wi), wi, pdf, sampled: BxdfFlags::DIFFUSE_REFLECTION })
     }
 }
