@@ -32,6 +32,7 @@ pub use area::{Emission, SurfacePoint};
 pub use emit::{EmitterPoint, LightPathStart};
 pub use select::LightSelect;
 pub use spatial::SpatialSelect;
+use spatial::{SAMPLES, Soa};
 
 use distant::DistantLight;
 use infinite::InfiniteLight;
@@ -238,38 +239,65 @@ impl<'a> Lights<'a> {
         Some(LightSample { li, wi, pdf, shadow, is_delta: self.is_delta(light) })
     }
 
-    /// For a triangle light: Σ over `samples` (reference point, light sample) of luminance(Li) / pdf, the light
-    /// sample's unoccluded contribution as [`Lights::sample_li`] makes it, skipping samples that carry
-    /// nothing or give a non-finite term (what pbrt-v3's spatial light distribution sums per voxel). The same
-    /// arithmetic as `sample_li`, less the error bound and shadow ray it has no use for, with the triangle
-    /// fetched once rather than per sample; `None` for every other kind of light.
-    pub(crate) fn triangle_unoccluded_sum(
-        &self,
-        light: usize,
-        samples: impl Iterator<Item = (Vec3A, [f32; 2])>,
-    ) -> Option<f32> {
+    /// For a triangle light: Σ over the voxel's sample points `at` (paired with the light samples whose
+    /// barycentrics are `bary`, as [`area::triangle_point`] makes them) of luminance(Li) / pdf, each light
+    /// sample's unoccluded contribution as [`Lights::sample_li`] makes it, skipping samples that carry nothing
+    /// or give a non-finite term (what pbrt-v3's spatial light distribution sums per voxel); `None` for every
+    /// other kind of light.
+    ///
+    /// The same operations as `sample_li` on each sample (less the error bound and shadow ray it has no use
+    /// for), written lane by lane over the points' coordinate arrays so that they run as vector
+    /// instructions; the terms are then added in the samples' order, so the sum is `sample_li`'s bit for bit.
+    pub(crate) fn triangle_unoccluded_sum(&self, light: usize, at: &Soa, bary: &Soa) -> Option<f32> {
         let Kind::Triangle { area, mesh, tri, tri_area, n_face } = self.entries[light].kind else { return None };
         let m = &self.geometry.meshes[mesh as usize];
-        let v = m.triangle(tri as usize).map(Vec3A::from);
         let e = &self.emission[area as usize];
-        let mut sum = 0.0f32;
-        for (at, u) in samples {
-            let (p, n, _) = area::triangle_point(m, tri as usize, v, n_face, u);
-            let Some(f) = shape_sampler::solid_angle_factor(at, &SurfacePoint { p, p_error: Vec3A::ZERO, n }) else {
-                continue;
-            };
-            let pdf = f / tri_area;
-            let wi = (p - at).normalize();
-            let li = e.l(n, -wi);
-            if !(pdf > 0.0 && pdf.is_finite()) || li == Spectrum::ZERO || !wi.is_finite() {
-                continue;
-            }
-            let y = luminance(li) / pdf;
-            if y.is_finite() {
-                sum += y;
-            }
+        if e.l == Spectrum::ZERO {
+            return Some(0.0);
         }
-        Some(sum)
+        let lum = luminance(e.l);
+        let [v0, v1, v2] = m.triangle(tri as usize);
+        // The emitting side: `area::triangle_normal` flips the face normal per sample when the interpolated
+        // shading normal points the other way, and once for the whole mesh otherwise.
+        let shading = (!m.normals.is_empty()).then(|| {
+            let idx = &m.indices[3 * tri as usize..3 * tri as usize + 3];
+            [0, 1, 2].map(|k| m.normals[idx[k] as usize])
+        });
+        let n = if shading.is_none() && m.flip_normals { -n_face } else { n_face };
+        let mut terms = [0.0f32; SAMPLES];
+        for i in 0..SAMPLES {
+            let (b0, b1, b2) = (bary.x[i], bary.y[i], bary.z[i]);
+            let p = [0, 1, 2].map(|k| b0 * v0[k] + b1 * v1[k] + b2 * v2[k]);
+            let flip = match shading {
+                Some([a, b, c]) => {
+                    let ns = [0, 1, 2].map(|k| a[k] * b0 + b[k] * b1 + c[k] * b2);
+                    n.x * ns[0] + n.y * ns[1] + n.z * ns[2] < 0.0
+                }
+                None => false,
+            };
+            let nn = if flip { -n } else { n };
+            let d = [p[0] - at.x[i], p[1] - at.y[i], p[2] - at.z[i]];
+            let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            let len = d2.sqrt();
+            let cos = (nn.x * d[0] + nn.y * d[1] + nn.z * d[2]).abs() / len;
+            let f = d2 / cos;
+            let pdf = f / tri_area;
+            let wi = d.map(|c| c / len); // glam's `normalize`: each coordinate divided by the length
+            let faces = e.two_sided | (nn.x * -wi[0] + nn.y * -wi[1] + nn.z * -wi[2] > 0.0);
+            let y = lum / pdf;
+            // Every condition evaluated (`&`, not `&&`): no branch in the loop, so it vectorises.
+            let keep = (d2 != 0.0)
+                & f.is_finite()
+                & (pdf > 0.0)
+                & pdf.is_finite()
+                & faces
+                & wi[0].is_finite()
+                & wi[1].is_finite()
+                & wi[2].is_finite()
+                & y.is_finite();
+            terms[i] = if keep { y } else { 0.0 };
+        }
+        Some(terms.iter().fold(0.0, |sum, &t| sum + t))
     }
 
     /// Where a ray leaving `si` in direction `wi` meets light `light` itself, ignoring the rest of the scene:

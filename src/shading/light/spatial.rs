@@ -22,7 +22,7 @@ use crate::shading::luminance;
 /// Voxels along the longest side of the scene bounds (pbrt-v3's `maxVoxels`).
 const MAX_VOXELS: f32 = 64.0;
 /// Points per voxel at which the lights are evaluated (pbrt-v3's `nSamples`).
-const SAMPLES: u32 = 128;
+pub(crate) const SAMPLES: usize = 128;
 /// Largest number of voxels kept (a degenerate flat scene gives far fewer; this bounds memory).
 const MAX_CELLS: usize = 64 * 64 * 64;
 
@@ -39,6 +39,32 @@ pub struct SpatialSelect {
     /// The points' radical inverses (bases 2, 3, 5: the position in the voxel; 7, 11: the light sample),
     /// computed once rather than for every voxel.
     halton: Box<[[f32; 5]]>,
+    /// The barycentrics (b0, b1, b2) a triangle light's sample at each point has (`area::triangle_point`
+    /// of the light sample): the same for every triangle.
+    bary: Box<Soa>,
+}
+
+/// [`SAMPLES`] points (or triples) as three coordinate arrays, which the per-light loops run over lane by
+/// lane.
+#[derive(Debug)]
+pub(crate) struct Soa {
+    /// First coordinates.
+    pub x: [f32; SAMPLES],
+    /// Second coordinates.
+    pub y: [f32; SAMPLES],
+    /// Third coordinates.
+    pub z: [f32; SAMPLES],
+}
+
+impl Soa {
+    /// `f(i)` for each point i.
+    fn from_fn(mut f: impl FnMut(usize) -> [f32; 3]) -> Box<Soa> {
+        let mut s = Box::new(Soa { x: [0.0; SAMPLES], y: [0.0; SAMPLES], z: [0.0; SAMPLES] });
+        for i in 0..SAMPLES {
+            [s.x[i], s.y[i], s.z[i]] = f(i);
+        }
+        s
+    }
 }
 
 impl SpatialSelect {
@@ -54,8 +80,16 @@ impl SpatialSelect {
             }
         }
         let count = (n[0] * n[1] * n[2]).min(MAX_CELLS);
-        let halton = (0..SAMPLES).map(|i| [2, 3, 5, 7, 11].map(|b| radical_inverse(b, i))).collect();
-        SpatialSelect { lo, extent, n, cells: (0..count).map(|_| OnceLock::new()).collect(), halton }
+        let halton: Box<[[f32; 5]]> =
+            (0..SAMPLES as u32).map(|i| [2, 3, 5, 7, 11].map(|b| radical_inverse(b, i))).collect();
+        let bary = Soa::from_fn(|i| {
+            // `area::triangle_point`'s barycentrics, operation for operation.
+            let [_, _, _, u0, u1] = halton[i];
+            let su0 = u0.sqrt();
+            let (b0, b1) = (1.0 - su0, u1 * su0);
+            [b0, b1, 1.0 - b0 - b1]
+        });
+        SpatialSelect { lo, extent, n, cells: (0..count).map(|_| OnceLock::new()).collect(), halton, bary }
     }
 
     /// The voxel holding `p` (clamped into the grid).
@@ -89,6 +123,21 @@ impl SpatialSelect {
         }
     }
 
+    /// Voxel `v`'s sample points and the light sample paired with each.
+    fn voxel_samples(&self, v: [usize; 3]) -> (Box<Soa>, Vec<[f32; 2]>) {
+        let size = Vec3A::new(
+            self.extent.x / self.n[0] as f32,
+            self.extent.y / self.n[1] as f32,
+            self.extent.z / self.n[2] as f32,
+        );
+        let p0 = self.lo + Vec3A::new(v[0] as f32, v[1] as f32, v[2] as f32) * size;
+        let points = Soa::from_fn(|i| {
+            let [x, y, z, ..] = self.halton[i];
+            (p0 + Vec3A::new(x, y, z) * size).to_array()
+        });
+        (points, self.halton.iter().map(|h| [h[3], h[4]]).collect())
+    }
+
     /// The table of the voxel holding `p` (see [`SpatialSelect::cells`]), built on first use.
     fn table(&self, lights: &Lights<'_>, p: Vec3A) -> &[f32] {
         let v = self.cell(p);
@@ -97,31 +146,15 @@ impl SpatialSelect {
 
     /// pbrt-v3's `SpatialLightDistribution::ComputeDistribution` for voxel `v`.
     fn compute(&self, lights: &Lights<'_>, v: [usize; 3]) -> Distribution1D {
-        let size = Vec3A::new(
-            self.extent.x / self.n[0] as f32,
-            self.extent.y / self.n[1] as f32,
-            self.extent.z / self.n[2] as f32,
-        );
-        let p0 = self.lo + Vec3A::new(v[0] as f32, v[1] as f32, v[2] as f32) * size;
+        let (points, u) = self.voxel_samples(v);
         let mut contrib = vec![0.0f32; lights.len()];
-        let samples = || self.halton.iter().map(|&[x, y, z, u0, u1]| (p0 + Vec3A::new(x, y, z) * size, [u0, u1]));
         for (j, c) in contrib.iter_mut().enumerate() {
             // Triangle lights (most scenes' only kind) by the dedicated loop; the sums are the same, term by
             // term and in the same order, as the general loop's.
-            if let Some(sum) = lights.triangle_unoccluded_sum(j, samples()) {
-                *c = sum;
-                continue;
-            }
-            for (at, u) in samples() {
-                if let Some(ls) = lights.sample_li_with::<false>(j, &point_interaction(at), u)
-                    && ls.pdf > 0.0
-                {
-                    let y = luminance(ls.li) / ls.pdf;
-                    if y.is_finite() {
-                        *c += y;
-                    }
-                }
-            }
+            *c = match lights.triangle_unoccluded_sum(j, &points, &self.bary) {
+                Some(sum) => sum,
+                None => unoccluded_sum(lights, j, &points, &u),
+            };
         }
         let sum: f32 = contrib.iter().sum();
         let avg = sum / (SAMPLES as f32 * contrib.len().max(1) as f32);
@@ -139,6 +172,24 @@ impl SpatialSelect {
         let (i, pmf) = pick(self.table(lights, p), u);
         (pmf > 0.0).then_some((i, pmf))
     }
+}
+
+/// Σ over the points `at` of luminance(Li) / pdf of light `j`'s sample `u[i]` at point i, without
+/// visibility, skipping samples that carry nothing or give a non-finite term (any kind of light).
+fn unoccluded_sum(lights: &Lights<'_>, j: usize, at: &Soa, u: &[[f32; 2]]) -> f32 {
+    let mut sum = 0.0;
+    for (i, &u) in u.iter().enumerate() {
+        let at = Vec3A::new(at.x[i], at.y[i], at.z[i]);
+        if let Some(ls) = lights.sample_li_with::<false>(j, &point_interaction(at), u)
+            && ls.pdf > 0.0
+        {
+            let y = luminance(ls.li) / ls.pdf;
+            if y.is_finite() {
+                sum += y;
+            }
+        }
+    }
+    sum
 }
 
 /// The table a voxel keeps for distribution `d` (see [`SpatialSelect::cells`]).
@@ -206,6 +257,56 @@ mod tests {
                 assert_eq!(pick(&t, u), d.sample_discrete(u), "f {f:?} u {u}");
             }
         }
+    }
+
+    #[test]
+    fn the_triangle_loop_sums_what_the_general_loop_sums_bit_for_bit() {
+        // Emitting triangles of every flavour `area::triangle_point` distinguishes: shading normals whose
+        // interpolation changes side across the triangle, a reversed mesh without normals, a two-sided quad,
+        // and a light in the plane of some voxel points; plus a disk, which only the general loop handles.
+        let text = r#"WorldBegin
+AttributeBegin
+AreaLightSource "diffuse" "rgb L" [1 2 3]
+Shape "trianglemesh" "point P" [0 0 0  2 0 0  0 2 0.5] "integer indices" [0 1 2] "normal N" [0 0 1  0 0 -1  0.3 0 1]
+AttributeEnd
+AttributeBegin
+ReverseOrientation
+AreaLightSource "diffuse" "rgb L" [2 2 2]
+Shape "trianglemesh" "point P" [0 0 2  0 2 2  2 0 2.5] "integer indices" [0 1 2]
+AttributeEnd
+AttributeBegin
+AreaLightSource "diffuse" "rgb L" [0.5 1 1] "bool twosided" "true"
+Shape "trianglemesh" "point P" [-1 -1 1  3 -1 1  3 3 1  -1 3 1] "integer indices" [0 1 2 0 2 3]
+AttributeEnd
+AttributeBegin
+Translate 1 1 3
+AreaLightSource "diffuse" "rgb L" [1 1 1]
+Shape "disk" "float radius" 0.5
+AttributeEnd
+Shape "trianglemesh" "point P" [-2 -2 -1  4 -2 -1  4 4 -1  -2 4 -1] "integer indices" [0 1 2 0 2 3]
+WorldEnd
+"#;
+        let loaded = crate::scene::load_str(text, std::path::Path::new("inline.pbrt"), Default::default()).unwrap();
+        let mut warnings = crate::error::Warnings::default();
+        let lights = Lights::build(&loaded.scene, &mut warnings).unwrap();
+        let s = SpatialSelect::new(loaded.scene.bounds());
+        let (mut compared, mut general) = (0, 0);
+        for v in (0..s.n[0]).step_by(3).flat_map(|x| (0..s.n[1]).step_by(3).map(move |y| (x, y))) {
+            for z in (0..s.n[2]).step_by(2) {
+                let (points, u) = s.voxel_samples([v.0, v.1, z]);
+                for j in 0..lights.len() {
+                    let slow = unoccluded_sum(&lights, j, &points, &u);
+                    match lights.triangle_unoccluded_sum(j, &points, &s.bary) {
+                        Some(fast) => {
+                            assert_eq!(fast.to_bits(), slow.to_bits(), "light {j} voxel {v:?},{z}: {fast} vs {slow}");
+                            compared += usize::from(slow > 0.0);
+                        }
+                        None => general += 1,
+                    }
+                }
+            }
+        }
+        assert!(compared > 500 && general > 100, "compared {compared}, general {general}");
     }
 
     #[test]
