@@ -203,6 +203,12 @@ pub fn run(args: &BenchArgs) -> Result<String> {
     let Some(pbrt_v2) = &args.pbrt_v2 else {
         return Err(Error::usage("--integrator irradiancecache needs --pbrt-v2 PATH (pbrt-v2's binary)"));
     };
+    if args.repeat > 1 {
+        return Err(Error::usage(
+            "--repeat applies to the ambientocclusion, directlighting and path rows; the irradiance-caching \
+             comparison runs each setting once",
+        ));
+    }
     // pbrt-v2 runs in a scratch folder, so a relative path must be made absolute first.
     let pbrt_v2 = &std::fs::canonicalize(pbrt_v2).map_err(|e| Error::file(pbrt_v2, format!("pbrt-v2 binary: {e}")))?;
     let dir = args.scenes.join(SCENE);
