@@ -265,7 +265,7 @@ impl<'a> Lights<'a> {
         });
         let n = if shading.is_none() && m.flip_normals { -n_face } else { n_face };
         let mut terms = [0.0f32; SAMPLES];
-        for i in 0..SAMPLES {
+        for (i, term) in terms.iter_mut().enumerate() {
             let (b0, b1, b2) = (bary.x[i], bary.y[i], bary.z[i]);
             let p = [0, 1, 2].map(|k| b0 * v0[k] + b1 * v1[k] + b2 * v2[k]);
             let flip = match shading {
@@ -295,7 +295,7 @@ impl<'a> Lights<'a> {
                 & wi[1].is_finite()
                 & wi[2].is_finite()
                 & y.is_finite();
-            terms[i] = if keep { y } else { 0.0 };
+            *term = if keep { y } else { 0.0 };
         }
         Some(terms.iter().fold(0.0, |sum, &t| sum + t))
     }
