@@ -28,6 +28,8 @@ pub struct ShapeSampler {
     normal_matrix: Mat3A,
     /// World-space area (exact for similarity transforms; |det|^(2/3) × object area otherwise).
     area: f32,
+    /// A disk's world-area density, the same at every point ([`ShapeSampler::area_density`] computed once).
+    disk_density: Option<f32>,
 }
 
 /// Object-space area of a quadric (pbrt-v3's `Area`), or `None` for a hyperboloid.
@@ -138,7 +140,12 @@ impl ShapeSampler {
             _ => None,
         };
         let area = if similar { obj_area * s * s } else { obj_area * det.powf(2.0 / 3.0) };
-        Some(ShapeSampler { sphere, det, normal_matrix: m.inverse().transpose(), area })
+        let mut s = ShapeSampler { sphere, det, normal_matrix: m.inverse().transpose(), area, disk_density: None };
+        if matches!(q.kind, QuadricKind::Disk { .. }) {
+            // A disk's object normal and density do not depend on the point.
+            s.disk_density = Some(s.area_density(q, DVec3::ZERO));
+        }
+        Some(s)
     }
 
     /// World-space area (for the light's power).
@@ -148,6 +155,9 @@ impl ShapeSampler {
 
     /// World-area density of the parametric sampler at object point `p_obj`.
     fn area_density(&self, q: &Quadric, p_obj: DVec3) -> f32 {
+        if let Some(d) = self.disk_density {
+            return d;
+        }
         let n = object_normal(&q.kind, p_obj).normalize_or_zero().as_vec3();
         let jac = self.det * (self.normal_matrix * Vec3A::from(n)).length();
         let d = object_density(&q.kind, p_obj) as f32 / jac;
