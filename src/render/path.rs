@@ -105,9 +105,10 @@ impl PixelIntegrator for Path<'_> {
             if bounces >= self.max_depth {
                 break;
             }
-            if let Select::Spatial(v) = &self.select {
-                v.prefetch(si.p);
-            }
+            let voxel = match &self.select {
+                Select::Spatial(v) => Some(v.locate(si.p)),
+                Select::Fixed(_) => None,
+            };
             if !sh.bsdf_into(&si, &mut bsdf) {
                 let Some(next) = pass.past(&si, &ray) else { break };
                 ray = next;
@@ -118,7 +119,10 @@ impl PixelIntegrator for Path<'_> {
             if bsdf.num_components(BxdfFlags::NON_SPECULAR) > 0 {
                 let d = match &self.select {
                     Select::Fixed(f) => sample_one_light(scene, sh, |u| f.sample(u), &x, s, c),
-                    Select::Spatial(v) => sample_one_light(scene, sh, |u| v.sample(&sh.lights, si.p, u), &x, s, c),
+                    Select::Spatial(v) => {
+                        let voxel = voxel.unwrap_or_else(|| v.locate(si.p));
+                        sample_one_light(scene, sh, |u| v.sample_in(&sh.lights, voxel, u), &x, s, c)
+                    }
                 };
                 l += beta * d;
             }

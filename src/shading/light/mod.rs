@@ -31,8 +31,8 @@ use crate::shading::{Spectrum, luminance};
 pub use area::{Emission, SurfacePoint};
 pub use emit::{EmitterPoint, LightPathStart};
 pub use select::LightSelect;
-pub use spatial::SpatialSelect;
 use spatial::{SAMPLES, Soa};
+pub use spatial::{SpatialSelect, Voxel};
 
 use distant::DistantLight;
 use infinite::InfiniteLight;

@@ -44,6 +44,15 @@ pub struct SpatialSelect {
     bary: Box<Soa>,
 }
 
+/// A voxel of the grid, as [`SpatialSelect::locate`] finds it.
+#[derive(Clone, Copy, Debug)]
+pub struct Voxel {
+    /// Its cell coordinates.
+    v: [usize; 3],
+    /// Its slot in [`SpatialSelect::cells`].
+    index: usize,
+}
+
 /// [`SAMPLES`] points (or triples) as three coordinate arrays, which the per-light loops run over lane by
 /// lane.
 #[derive(Debug)]
@@ -108,19 +117,23 @@ impl SpatialSelect {
         ((v[2] * self.n[1] + v[1]) * self.n[0] + v[0]).min(self.cells.len() - 1)
     }
 
-    /// Asks the CPU to bring the table of the voxel holding `p` into its cache, if that table is built: a path
-    /// calls this as soon as it knows its next vertex and asks [`SpatialSelect::sample`] after shading it,
-    /// so the table's two cache misses overlap the shading work instead of stalling the light choice.
+    /// The voxel holding `p`, its table asked for in advance: the CPU is told to bring the table into its
+    /// cache if it is built. A path calls this as soon as it knows its next vertex and picks the light with
+    /// [`SpatialSelect::sample_in`] after shading it, so the table's cache misses overlap the shading work
+    /// instead of stalling the light choice.
     #[inline]
-    pub fn prefetch(&self, p: Vec3A) {
+    pub fn locate(&self, p: Vec3A) -> Voxel {
+        let v = self.cell(p);
+        let voxel = Voxel { v, index: self.index(v) };
         #[cfg(target_arch = "x86_64")]
-        if let Some(t) = self.cells[self.index(self.cell(p))].get() {
+        if let Some(t) = self.cells[voxel.index].get() {
             use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
             for line in t.chunks(16) {
                 // SAFETY: prefetching is a hint; the address is that of live data.
                 unsafe { _mm_prefetch::<_MM_HINT_T0>(line.as_ptr().cast()) };
             }
         }
+        voxel
     }
 
     /// Voxel `v`'s sample points and the light sample paired with each.
@@ -138,10 +151,9 @@ impl SpatialSelect {
         (points, self.halton.iter().map(|h| [h[3], h[4]]).collect())
     }
 
-    /// The table of the voxel holding `p` (see [`SpatialSelect::cells`]), built on first use.
-    fn table(&self, lights: &Lights<'_>, p: Vec3A) -> &[f32] {
-        let v = self.cell(p);
-        self.cells[self.index(v)].get_or_init(|| table_of(&self.compute(lights, v)))
+    /// The table of `voxel` (see [`SpatialSelect::cells`]), built on first use.
+    fn table(&self, lights: &Lights<'_>, voxel: Voxel) -> &[f32] {
+        self.cells[voxel.index].get_or_init(|| table_of(&self.compute(lights, voxel.v)))
     }
 
     /// pbrt-v3's `SpatialLightDistribution::ComputeDistribution` for voxel `v`.
@@ -166,10 +178,17 @@ impl SpatialSelect {
     /// Picks a light for a point at `p` with `u` ∈ [0, 1): its index and probability.
     #[inline]
     pub fn sample(&self, lights: &Lights<'_>, p: Vec3A, u: f32) -> Option<(usize, f32)> {
+        let v = self.cell(p);
+        self.sample_in(lights, Voxel { v, index: self.index(v) }, u)
+    }
+
+    /// [`SpatialSelect::sample`] for a point in `voxel` (from [`SpatialSelect::locate`]).
+    #[inline]
+    pub fn sample_in(&self, lights: &Lights<'_>, voxel: Voxel, u: f32) -> Option<(usize, f32)> {
         if lights.is_empty() {
             return None;
         }
-        let (i, pmf) = pick(self.table(lights, p), u);
+        let (i, pmf) = pick(self.table(lights, voxel), u);
         (pmf > 0.0).then_some((i, pmf))
     }
 }
