@@ -5,8 +5,6 @@
 //! A per-pixel reference for the cache applications; depends on `scene`, `shading` and the estimators in
 //! `render::lighting`.
 
-use glam::Vec3A;
-
 use crate::error::{Error, Result, Warnings};
 use crate::scene::Scene;
 use crate::scene::ray::Ray;
@@ -81,26 +79,30 @@ impl<'a> DirectLighting<'a> {
         Ok(DirectLighting { shading, strategy, max_depth, counts, uniform })
     }
 
+    /// The radiance along `ray` at recursion depth `depth`; `bsdfs` holds a BSDF for this depth and each
+    /// deeper one.
+    #[allow(clippy::too_many_arguments)]
     fn radiance(
         &self,
         scene: &Scene,
         mut ray: Ray,
         depth: u32,
+        bsdfs: &mut [Bsdf],
         s: &mut PixelSamples,
         scratch: &mut Scratch,
         c: &mut RayCounters,
     ) -> Spectrum {
         let sh = &self.shading;
-        let mut bsdf = Bsdf::new(Vec3A::Z, Vec3A::Z, Vec3A::X, 1.0);
+        let Some((bsdf, deeper)) = bsdfs.split_first_mut() else { return Spectrum::ZERO };
         for _ in 0..MAX_PASS_THROUGH {
             c.camera += 1;
             let Some(si) = scene.geometry.intersect(&ray) else { return sh.lights.le_escaped(&ray) };
-            if !sh.bsdf_into(&si, &mut bsdf) {
+            if !sh.bsdf_into(&si, bsdf) {
                 ray = si.spawn_ray(ray.d);
                 continue;
             }
             let wo = -ray.d;
-            let x = ShadePoint { si: &si, bsdf: &bsdf, wo };
+            let x = ShadePoint { si: &si, bsdf, wo };
             let mut l = sh.lights.emitted(&si, wo);
             if !sh.lights.is_empty() {
                 l += match self.strategy {
@@ -110,7 +112,7 @@ impl<'a> DirectLighting<'a> {
             }
             if depth + 1 < self.max_depth {
                 for lobe in [BxdfFlags::REFLECTION, BxdfFlags::TRANSMISSION] {
-                    l += self.specular(scene, &x, lobe, depth, s, scratch, c);
+                    l += self.specular(scene, &x, lobe, depth, deeper, s, scratch, c);
                 }
             }
             return l;
@@ -126,6 +128,7 @@ impl<'a> DirectLighting<'a> {
         x: &ShadePoint<'_>,
         lobe: BxdfFlags,
         depth: u32,
+        bsdfs: &mut [Bsdf],
         s: &mut PixelSamples,
         scratch: &mut Scratch,
         c: &mut RayCounters,
@@ -136,7 +139,7 @@ impl<'a> DirectLighting<'a> {
         if bs.pdf <= 0.0 || bs.f == Spectrum::ZERO || cos == 0.0 {
             return Spectrum::ZERO;
         }
-        let li = self.radiance(scene, x.si.spawn_ray(bs.wi), depth + 1, s, scratch, c);
+        let li = self.radiance(scene, x.si.spawn_ray(bs.wi), depth + 1, bsdfs, s, scratch, c);
         bs.f * li * cos / bs.pdf
     }
 }
@@ -162,6 +165,9 @@ impl PixelIntegrator for DirectLighting<'_> {
         scratch: &mut Scratch,
         c: &mut RayCounters,
     ) -> [f32; 3] {
-        self.radiance(scene, ray, 0, s, scratch, c).to_array()
+        let mut bsdfs = scratch.take_bsdfs(self.max_depth.max(1) as usize);
+        let l = self.radiance(scene, ray, 0, &mut bsdfs, s, scratch, c);
+        scratch.bsdfs = bsdfs;
+        l.to_array()
     }
 }

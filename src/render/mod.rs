@@ -17,6 +17,8 @@ pub mod samples;
 
 pub use driver::render_image;
 
+use glam::Vec3A;
+
 use crate::application::registry;
 use crate::error::{Error, Result, Warnings};
 use crate::image::Image;
@@ -24,6 +26,7 @@ use crate::parse::{Named, ParamList};
 use crate::scene::Scene;
 use crate::scene::accel::OccluderHint;
 use crate::scene::ray::Ray;
+use crate::shading::bsdf::Bsdf;
 
 use samples::PixelSamples;
 
@@ -38,6 +41,22 @@ pub struct Scratch {
     /// with every light sampled at every vertex tests it first, as neighbouring points' shadow rays toward
     /// the same light are often blocked by the same triangle. It never changes an answer.
     pub light_hints: Vec<OccluderHint>,
+    /// BSDFs kept from one camera sample to the next, one per depth of recursion (`path` uses the first,
+    /// `directlighting` one per specular bounce): refilled at each hit ([`Bsdf::reset`]) rather than built
+    /// afresh, which writes all 848 bytes of its lobe storage.
+    pub bsdfs: Vec<Bsdf>,
+}
+
+impl Scratch {
+    /// Takes [`Scratch::bsdfs`] out, at least `n` of them (made when missing), so that an integrator can
+    /// hold them while it lends the scratch to the estimators; it puts them back with `scratch.bsdfs = …`.
+    pub fn take_bsdfs(&mut self, n: usize) -> Vec<Bsdf> {
+        let mut bsdfs = std::mem::take(&mut self.bsdfs);
+        if bsdfs.len() < n {
+            bsdfs.resize(n, Bsdf::new(Vec3A::Z, Vec3A::Z, Vec3A::X, 1.0));
+        }
+        bsdfs
+    }
 }
 
 /// An integrator that estimates the radiance along one camera ray.

@@ -8,13 +8,10 @@
 //!
 //! A per-pixel reference for the cache applications; depends on `scene`, `shading` and `render::lighting`.
 
-use glam::Vec3A;
-
 use crate::error::{Error, Result, Warnings};
 use crate::scene::Scene;
 use crate::scene::ray::Ray;
 use crate::shading::Spectrum;
-use crate::shading::bsdf::Bsdf;
 use crate::shading::bxdf::BxdfFlags;
 use crate::shading::light::{LightSelect, SpatialSelect};
 
@@ -80,7 +77,7 @@ impl PixelIntegrator for Path<'_> {
         scene: &Scene,
         mut ray: Ray,
         s: &mut PixelSamples,
-        _scratch: &mut Scratch,
+        scratch: &mut Scratch,
         c: &mut RayCounters,
     ) -> [f32; 3] {
         let sh = &self.shading;
@@ -90,7 +87,8 @@ impl PixelIntegrator for Path<'_> {
         let mut eta_scale = 1.0f32;
         let mut bounces = 0u32;
         let mut pass = PassThrough::default();
-        let mut bsdf = Bsdf::new(Vec3A::Z, Vec3A::Z, Vec3A::X, 1.0);
+        let mut bsdfs = scratch.take_bsdfs(1);
+        let bsdf = &mut bsdfs[0];
         loop {
             c.camera += 1;
             let hit = scene.geometry.intersect(&ray);
@@ -109,13 +107,13 @@ impl PixelIntegrator for Path<'_> {
                 Select::Spatial(v) => Some(v.locate(si.p)),
                 Select::Fixed(_) => None,
             };
-            if !sh.bsdf_into(&si, &mut bsdf) {
+            if !sh.bsdf_into(&si, bsdf) {
                 let Some(next) = pass.past(&si, &ray) else { break };
                 ray = next;
                 continue;
             };
             let wo = -ray.d;
-            let x = ShadePoint { si: &si, bsdf: &bsdf, wo };
+            let x = ShadePoint { si: &si, bsdf, wo };
             if bsdf.num_components(BxdfFlags::NON_SPECULAR) > 0 {
                 let d = match &self.select {
                     Select::Fixed(f) => sample_one_light(scene, sh, |u| f.sample(u), &x, s, c),
@@ -147,6 +145,7 @@ impl PixelIntegrator for Path<'_> {
             }
             bounces += 1;
         }
+        scratch.bsdfs = bsdfs;
         l.to_array()
     }
 }
