@@ -39,8 +39,12 @@ fn repeat_keeps_the_least_cpu_time_of_every_run_and_lists_them() {
 
 #[test]
 fn the_irradiance_caching_comparison_refuses_repeat() {
+    // A scenes folder of its own, so that the refusal, not a missing folder, is what stops it (CI's clone has
+    // no ../shared).
+    let dir = TempDir::new("bench-repeat-irc");
     let out = Command::new(env!("CARGO_BIN_EXE_cachert"))
-        .args(["bench", "--integrator", "irradiancecache", "--pbrt-v2", "/bin/true", "--repeat", "2"])
+        .args(["bench", "--integrator", "irradiancecache", "--pbrt-v2", "/bin/true", "--repeat", "2", "--scenes"])
+        .arg(&dir.0)
         .output()
         .expect("the binary runs");
     assert_eq!(out.status.code(), Some(2));
