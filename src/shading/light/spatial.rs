@@ -136,19 +136,19 @@ impl SpatialSelect {
         voxel
     }
 
-    /// Voxel `v`'s sample points and the light sample paired with each.
-    fn voxel_samples(&self, v: [usize; 3]) -> (Box<Soa>, Vec<[f32; 2]>) {
+    /// Voxel `v`'s sample points (point i's light sample is the last two radical inverses of
+    /// [`SpatialSelect::halton`]`[i]`, the same in every voxel).
+    fn voxel_points(&self, v: [usize; 3]) -> Box<Soa> {
         let size = Vec3A::new(
             self.extent.x / self.n[0] as f32,
             self.extent.y / self.n[1] as f32,
             self.extent.z / self.n[2] as f32,
         );
         let p0 = self.lo + Vec3A::new(v[0] as f32, v[1] as f32, v[2] as f32) * size;
-        let points = Soa::from_fn(|i| {
+        Soa::from_fn(|i| {
             let [x, y, z, ..] = self.halton[i];
             (p0 + Vec3A::new(x, y, z) * size).to_array()
-        });
-        (points, self.halton.iter().map(|h| [h[3], h[4]]).collect())
+        })
     }
 
     /// The table of `voxel` (see [`SpatialSelect::cells`]), built on first use.
@@ -158,14 +158,14 @@ impl SpatialSelect {
 
     /// pbrt-v3's `SpatialLightDistribution::ComputeDistribution` for voxel `v`.
     fn compute(&self, lights: &Lights<'_>, v: [usize; 3]) -> Distribution1D {
-        let (points, u) = self.voxel_samples(v);
+        let points = self.voxel_points(v);
         let mut contrib = vec![0.0f32; lights.len()];
         for (j, c) in contrib.iter_mut().enumerate() {
             // Triangle lights (most scenes' only kind) by the dedicated loop; the sums are the same, term by
             // term and in the same order, as the general loop's.
             *c = match lights.triangle_unoccluded_sum(j, &points, &self.bary) {
                 Some(sum) => sum,
-                None => unoccluded_sum(lights, j, &points, &u),
+                None => self.unoccluded_sum(lights, j, &points),
             };
         }
         let sum: f32 = contrib.iter().sum();
@@ -173,6 +173,24 @@ impl SpatialSelect {
         let floor = if avg > 0.0 { 0.001 * avg } else { 1.0 };
         contrib.iter_mut().for_each(|c| *c = c.max(floor));
         Distribution1D::new(&contrib)
+    }
+
+    /// Σ over the points `at` of luminance(Li) / pdf of light `j`'s sample at point i, without visibility,
+    /// skipping samples that carry nothing or give a non-finite term (any kind of light).
+    fn unoccluded_sum(&self, lights: &Lights<'_>, j: usize, at: &Soa) -> f32 {
+        let mut sum = 0.0;
+        for (i, h) in self.halton.iter().enumerate() {
+            let at = Vec3A::new(at.x[i], at.y[i], at.z[i]);
+            if let Some(ls) = lights.sample_li_with::<false>(j, &point_interaction(at), [h[3], h[4]])
+                && ls.pdf > 0.0
+            {
+                let y = luminance(ls.li) / ls.pdf;
+                if y.is_finite() {
+                    sum += y;
+                }
+            }
+        }
+        sum
     }
 
     /// Picks a light for a point at `p` with `u` ∈ [0, 1): its index and probability.
@@ -191,24 +209,6 @@ impl SpatialSelect {
         let (i, pmf) = pick(self.table(lights, voxel), u);
         (pmf > 0.0).then_some((i, pmf))
     }
-}
-
-/// Σ over the points `at` of luminance(Li) / pdf of light `j`'s sample `u[i]` at point i, without
-/// visibility, skipping samples that carry nothing or give a non-finite term (any kind of light).
-fn unoccluded_sum(lights: &Lights<'_>, j: usize, at: &Soa, u: &[[f32; 2]]) -> f32 {
-    let mut sum = 0.0;
-    for (i, &u) in u.iter().enumerate() {
-        let at = Vec3A::new(at.x[i], at.y[i], at.z[i]);
-        if let Some(ls) = lights.sample_li_with::<false>(j, &point_interaction(at), u)
-            && ls.pdf > 0.0
-        {
-            let y = luminance(ls.li) / ls.pdf;
-            if y.is_finite() {
-                sum += y;
-            }
-        }
-    }
-    sum
 }
 
 /// The table a voxel keeps for distribution `d` (see [`SpatialSelect::cells`]).
@@ -312,9 +312,9 @@ WorldEnd
         let (mut compared, mut general) = (0, 0);
         for v in (0..s.n[0]).step_by(3).flat_map(|x| (0..s.n[1]).step_by(3).map(move |y| (x, y))) {
             for z in (0..s.n[2]).step_by(2) {
-                let (points, u) = s.voxel_samples([v.0, v.1, z]);
+                let points = s.voxel_points([v.0, v.1, z]);
                 for j in 0..lights.len() {
-                    let slow = unoccluded_sum(&lights, j, &points, &u);
+                    let slow = s.unoccluded_sum(&lights, j, &points);
                     match lights.triangle_unoccluded_sum(j, &points, &s.bary) {
                         Some(fast) => {
                             assert_eq!(fast.to_bits(), slow.to_bits(), "light {j} voxel {v:?},{z}: {fast} vs {slow}");
