@@ -20,6 +20,7 @@
 
 pub mod distribution;
 pub mod mixture;
+pub mod sharp;
 pub mod vpl;
 
 use crate::error::{Error, Result, Warnings};
@@ -36,6 +37,7 @@ use crate::shading::{Spectrum, luminance};
 use super::{Application, Baseline, Neighbour, PerSample};
 use distribution::Quantised;
 use mixture::{LETTERS, Mis, Mixture};
+use sharp::Split;
 use vpl::{Receiver, Vpls};
 
 /// Stream tag of VPL generation.
@@ -84,6 +86,8 @@ pub struct ImportanceCache {
     pub sampling: Sampling,
     /// VPLs a baseline draws per sample (0: one per enabled technique).
     pub draws: u32,
+    /// Widest sharp-lobe cone summed apart at the shading point, degrees (0: no split; [`sharp`]).
+    pub split_cone: f32,
 }
 
 /// One importance cache: where it is (B is built from it once its region is known) and its F, U and B
@@ -101,6 +105,8 @@ pub struct Lit<'s> {
     vpls: Vpls,
     /// Cumulative VPL flux (f64, last = total) for `sampling power`.
     flux_cdf: Vec<f64>,
+    /// The near-specular split.
+    split: Split,
 }
 
 impl Lit<'_> {
@@ -153,7 +159,8 @@ impl ImportanceCache {
     fn baseline(&self, cx: &Lit<'_>, x: &Receiver, rng: &mut Rng, rays: &mut RayCounters) -> Spectrum {
         let n = cx.vpls.len();
         let k = self.baseline_draws().max(1);
-        let mut l = Spectrum::ZERO;
+        let split = cx.split.at(x);
+        let mut l = split.estimate(cx.scene, &cx.shading, &cx.vpls, x, rng, rays);
         for _ in 0..k {
             let (j, p) = match self.sampling {
                 Sampling::Uniform if n > 0 => (rng.below(n as u32) as usize, 1.0 / n as f64),
@@ -163,7 +170,9 @@ impl ImportanceCache {
                 },
                 _ => continue,
             };
-            l += cx.contribution(j, x, rays) * (1.0 / (p * k as f64)) as f32;
+            if !split.holds(&cx.vpls, j) {
+                l += cx.contribution(j, x, rays) * (1.0 / (p * k as f64)) as f32;
+            }
         }
         l
     }
@@ -171,7 +180,8 @@ impl ImportanceCache {
     /// The B distribution of a cache at `at` serving a region of radius `region`.
     fn bounded(&self, cx: &Lit<'_>, at: &ShadingPoint, region: f32) -> Option<Quantised> {
         let x = cx.receiver(at)?;
-        let w: Vec<f32> = (0..cx.vpls.len()).map(|j| cx.vpls.bound(&cx.shading, j, &x, region)).collect();
+        let mut w: Vec<f32> = (0..cx.vpls.len()).map(|j| cx.vpls.bound(&cx.shading, j, &x, region)).collect();
+        cx.split.at(&x).for_each(&cx.vpls, |j| w[j] = 0.0);
         Quantised::new(&w)
     }
 }
@@ -213,6 +223,13 @@ impl Application for ImportanceCache {
             "integer",
             "0",
             "VPLs the uniform and power baselines draw per sample (0: one per technique)",
+        ),
+        Parameter::new(
+            "splitcone",
+            "float",
+            "10",
+            "degrees: VPLs in a sharper reflection lobe's cone, or whose lobe's cone holds the point, are drawn \
+             apart at the shading point by their exact unoccluded light (every sampling; 0: off)",
         ),
     ];
     const DGS_GEOMETRY: bool = false;
@@ -287,7 +304,12 @@ impl Application for ImportanceCache {
         if !(0..=1 << 20).contains(&draws) {
             return Err(bad("draws", format!("must be between 0 and {}, got {draws}", 1 << 20)));
         }
+        let split_cone = p.float_or("splitcone", 10.0)?;
+        if !(0.0..=90.0).contains(&split_cone) {
+            return Err(bad("splitcone", format!("must be between 0 and 90 degrees, got {split_cone}")));
+        }
         Ok(ImportanceCache {
+            split_cone: split_cone as f32,
             draws: draws as u32,
             vpls: vpls as usize,
             max_depth: max_depth as u32,
@@ -327,7 +349,8 @@ impl Application for ImportanceCache {
                 acc
             })
             .collect();
-        Ok(Lit { scene, shading, vpls, flux_cdf })
+        let split = Split::new(&vpls, self.split_cone.to_radians());
+        Ok(Lit { scene, shading, vpls, flux_cdf, split })
     }
 
     fn settings(&self) -> Vec<(&'static str, serde_json::Value)> {
@@ -340,6 +363,10 @@ impl Application for ImportanceCache {
             ("mis", if self.mis == Mis::Balance { "balance" } else { "alphamax" }.into()),
             ("sampling", self.sampling.name().into()),
             ("draws", self.baseline_draws().into()),
+            (
+                "splitcone",
+                serde_json::Number::from_f64(self.split_cone as f64).map_or(serde_json::Value::Null, Into::into),
+            ),
         ]
     }
 
@@ -356,6 +383,7 @@ impl Application for ImportanceCache {
                     ("vplseed", self.vpl_seed.to_string()),
                     ("clamp", self.clamp.to_string()),
                     ("distributions", self.letters()),
+                    ("splitcone", self.split_cone.to_string()),
                 ];
                 Baseline {
                     label: sampling.name(),
@@ -378,8 +406,11 @@ impl Application for ImportanceCache {
     fn compute_record(&self, cx: &Lit<'_>, at: &ShadingPoint, _: &mut Rng, rays: &mut RayCounters) -> ImportanceRecord {
         let Some(x) = cx.receiver(at) else { return ImportanceRecord { at: *at, dists: [None, None, None] } };
         let n = cx.vpls.len();
-        let unoccluded: Vec<f32> =
+        let mut unoccluded: Vec<f32> =
             (0..n).map(|j| cx.vpls.unoccluded_value(&cx.shading, j, &x).map_or(0.0, luminance)).collect();
+        // The VPLs of the cache's own near-specular split are drawn apart wherever they matter: left in,
+        // their spikes would take the whole distribution.
+        cx.split.at(&x).for_each(&cx.vpls, |j| unoccluded[j] = 0.0);
         // A VPL whose unoccluded contribution quantises to 0 gets no shadow ray: F is 0 for it too (C still
         // draws it), and the shadow rays go to the VPLs that matter. (With every value 0 there is nothing
         // to trace: F and U are both empty.)
@@ -429,10 +460,12 @@ impl Application for ImportanceCache {
         let mut l = cx.emitted(s);
         if let Some(x) = cx.receiver(s) {
             let mix = Mixture::new(near.iter().map(|c| &c.record.dists), self.enabled, cx.vpls.len());
+            let split = cx.split.at(&x);
+            l += split.estimate(cx.scene, &cx.shading, &cx.vpls, &x, rng, rays);
             for t in 0..4 {
                 let Some(j) = mix.sample(t, rng) else { continue };
                 let factor = mix.factor(t, j, self.mis);
-                if factor > 0.0 {
+                if factor > 0.0 && !split.holds(&cx.vpls, j) {
                     l += cx.contribution(j, &x, rays) * factor;
                 }
             }
@@ -481,6 +514,7 @@ mod tests {
             mis: Mis::Balance,
             sampling: Sampling::Cache,
             draws: 0,
+            split_cone: 10.0,
         };
         let total = 25_000 * app.record_bytes_bound();
         assert!(total <= 1_000_000_000, "{total}");
