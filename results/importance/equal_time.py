@@ -5,12 +5,15 @@ chosen in proportion to their power, or uniformly). For every scene, placement a
 seeds of RMSE, HDR-FLIP and wall seconds, each baseline's RMSE and FLIP at the same time (interpolated
 linearly in log-time/log-error between its two nearest sample counts, extrapolated as error ∝ t^-1/2 outside
 them), and the ratio baseline / importance caching (> 1: importance caching ahead).
-Standard library only.  Usage: equal_time.py results.csv"""
+With a second results.csv, the baselines are taken from it instead (say, a run with `--set splitcone=0`:
+the standard many-light estimators without the near-specular split, against the same reference).
+Standard library only.  Usage: equal_time.py results.csv [baselines.csv]"""
 import csv, math, sys
 from collections import defaultdict
 
 BASELINES = ("power", "uniform")
 rows = list(csv.DictReader(open(sys.argv[1])))
+base_rows = list(csv.DictReader(open(sys.argv[2]))) if len(sys.argv) > 2 else rows
 scenes = list(dict.fromkeys(r["scene"] for r in rows))
 
 
@@ -30,7 +33,7 @@ for scene in scenes:
     bases = {}
     for label in BASELINES:
         b = sorted((float(r["total_s"]), float(r["rmse"]), float(r["flip"]))
-                   for r in rows if r["scene"] == scene and r["placement"].startswith(label + ":"))
+                   for r in base_rows if r["scene"] == scene and r["placement"].startswith(label + ":"))
         if b:
             bases[label] = b
     groups = defaultdict(list)
