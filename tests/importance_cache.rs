@@ -357,6 +357,8 @@ fn bad_parameters_and_absurd_budgets_are_clear_errors() {
         ("sampling", "all", "power"),
         ("clamp", "-1", "≥ 0"),
         ("vpldepth", "-2", "between 0"),
+        ("splitcone", "120", "between 0 and 90"),
+        ("splitcone", "-1", "between 0 and 90"),
     ] {
         let e = render_with(&loaded, &[(k, v)], 1, None).unwrap_err().to_string();
         assert!(e.contains(k) && e.contains(want), "{k}={v}: {e}");

@@ -8,7 +8,9 @@
 //! ([`distribution`], about one byte per VPL). A sub-pixel sample draws one VPL from each technique F, U,
 //! B and C (uniform over all VPLs), each the mixture of its selected caches' distributions, and combines
 //! them by multiple importance sampling ([`mixture`]): the balance heuristic by default, α-max as an
-//! option. Every draw costs one shadow ray. Directly seen emitters add their radiance.
+//! option. Every draw costs one shadow ray. Directly seen emitters add their radiance. The few VPLs a
+//! near-specular lobe singles out at a shading point are drawn apart there, in every sampling mode
+//! ([`sharp`], parameter `splitcone`).
 //!
 //! `placement none` is the reference: the exact sum over every VPL with visibility at every sub-pixel
 //! sample — the noise-free many-light image the cached estimator is unbiased for (same VPLs, same clamp).
