@@ -264,12 +264,6 @@ impl Local<'_> {
         to_center <= cone.angle + spread + 1e-3
     }
 
-    /// Whether S(s) may have members (false: nothing to add or exclude).
-    #[inline]
-    pub fn may_hold(&self) -> bool {
-        self.cone.is_some() || !self.split.beams.is_empty()
-    }
-
     /// An estimate of Σ_{j∈S(s)} I_j(s) at receiver `x`: one member drawn in proportion to the luminance
     /// of its unoccluded contribution (weighted reservoir sampling, one uniform per member), its
     /// visibility decided by one shadow ray.

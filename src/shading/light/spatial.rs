@@ -193,14 +193,8 @@ impl SpatialSelect {
         sum
     }
 
-    /// Picks a light for a point at `p` with `u` ∈ [0, 1): its index and probability.
-    #[inline]
-    pub fn sample(&self, lights: &Lights<'_>, p: Vec3A, u: f32) -> Option<(usize, f32)> {
-        let v = self.cell(p);
-        self.sample_in(lights, Voxel { v, index: self.index(v) }, u)
-    }
-
-    /// [`SpatialSelect::sample`] for a point in `voxel` (from [`SpatialSelect::locate`]).
+    /// Picks a light for a point in `voxel` (from [`SpatialSelect::locate`]) with `u` ∈ [0, 1): its index and
+    /// probability.
     #[inline]
     pub fn sample_in(&self, lights: &Lights<'_>, voxel: Voxel, u: f32) -> Option<(usize, f32)> {
         if lights.is_empty() {
