@@ -9,8 +9,8 @@
 //! B and C (uniform over all VPLs), each the mixture of its selected caches' distributions, and combines
 //! them by multiple importance sampling ([`mixture`]): the balance heuristic by default, α-max as an
 //! option. Every draw costs one shadow ray. Directly seen emitters add their radiance. The few VPLs a
-//! near-specular lobe singles out at a shading point are drawn apart there, in every sampling mode
-//! ([`sharp`], parameter `splitcone`).
+//! near-specular lobe singles out at a shading point, and those closer to it than d_c, are drawn apart
+//! there, in every sampling mode ([`sharp`], parameters `splitcone` and `splitnear`).
 //!
 //! `placement none` is the reference: the exact sum over every VPL with visibility at every sub-pixel
 //! sample — the noise-free many-light image the cached estimator is unbiased for (same VPLs, same clamp).
@@ -88,8 +88,11 @@ pub struct ImportanceCache {
     pub sampling: Sampling,
     /// VPLs a baseline draws per sample (0: one per enabled technique).
     pub draws: u32,
-    /// Widest sharp-lobe cone summed apart at the shading point, degrees (0: no split; [`sharp`]).
+    /// Widest sharp-lobe cone summed apart at the shading point, degrees (0: no cones; [`sharp`]).
     pub split_cone: f32,
+    /// Radius of the ball around the shading point whose VPLs are summed apart, in units of d_c (0: no
+    /// ball; [`sharp`]).
+    pub split_near: f32,
 }
 
 /// One importance cache: where it is (B is built from it once its region is known) and its F, U and B
@@ -107,7 +110,7 @@ pub struct Lit<'s> {
     vpls: Vpls,
     /// Cumulative VPL flux (f64, last = total) for `sampling power`.
     flux_cdf: Vec<f64>,
-    /// The near-specular split.
+    /// The split: near VPLs and near-specular lobes.
     split: Split,
 }
 
@@ -233,6 +236,13 @@ impl Application for ImportanceCache {
             "degrees: VPLs in a sharper reflection lobe's cone, or whose lobe's cone holds the point, are drawn \
              apart at the shading point by their exact unoccluded light (every sampling; 0: off)",
         ),
+        Parameter::new(
+            "splitnear",
+            "float",
+            "1",
+            "VPLs closer to the shading point than this many clamp distances d_c are drawn apart there too \
+             (every sampling; 0: off)",
+        ),
     ];
     const DGS_GEOMETRY: bool = false;
     const PAPER_CACHES: usize = 25_000;
@@ -310,8 +320,13 @@ impl Application for ImportanceCache {
         if !(0.0..=90.0).contains(&split_cone) {
             return Err(bad("splitcone", format!("must be between 0 and 90 degrees, got {split_cone}")));
         }
+        let split_near = p.float_or("splitnear", 1.0)?;
+        if !(0.0..=100.0).contains(&split_near) {
+            return Err(bad("splitnear", format!("must be between 0 and 100 clamp distances, got {split_near}")));
+        }
         Ok(ImportanceCache {
             split_cone: split_cone as f32,
+            split_near: split_near as f32,
             draws: draws as u32,
             vpls: vpls as usize,
             max_depth: max_depth as u32,
@@ -351,7 +366,7 @@ impl Application for ImportanceCache {
                 acc
             })
             .collect();
-        let split = Split::new(&vpls, self.split_cone.to_radians());
+        let split = Split::new(&vpls, self.split_cone.to_radians(), self.split_near * vpls.clamp2.sqrt());
         Ok(Lit { scene, shading, vpls, flux_cdf, split })
     }
 
@@ -368,6 +383,10 @@ impl Application for ImportanceCache {
             (
                 "splitcone",
                 serde_json::Number::from_f64(self.split_cone as f64).map_or(serde_json::Value::Null, Into::into),
+            ),
+            (
+                "splitnear",
+                serde_json::Number::from_f64(self.split_near as f64).map_or(serde_json::Value::Null, Into::into),
             ),
         ]
     }
@@ -386,6 +405,7 @@ impl Application for ImportanceCache {
                     ("clamp", self.clamp.to_string()),
                     ("distributions", self.letters()),
                     ("splitcone", self.split_cone.to_string()),
+                    ("splitnear", self.split_near.to_string()),
                 ];
                 Baseline {
                     label: sampling.name(),
@@ -517,6 +537,7 @@ mod tests {
             sampling: Sampling::Cache,
             draws: 0,
             split_cone: 10.0,
+            split_near: 1.0,
         };
         let total = 25_000 * app.record_bytes_bound();
         assert!(total <= 1_000_000_000, "{total}");

@@ -1,24 +1,34 @@
-//! STAGE 5 (application, importance caching): the near-specular split — the few VPLs a shading point's
-//! sharp reflection lobe points at, or whose own sharp lobe points at the shading point, are summed apart
-//! from the cached (or baseline) estimator.
+//! STAGE 5 (application, importance caching): the split — the VPLs closer to a shading point than the
+//! clamp distance d_c, the few its sharp reflection lobe points at, and those whose own sharp lobe points
+//! at it, are summed apart from the cached (or baseline) estimator.
 //!
-//! Why: a reflection lobe of roughness 0.001–0.01 (the bathroom's bathtub, vase and taps) turns the one VPL
-//! it happens to point at into a spike hundreds of times the pixel's diffuse light, and a VPL on such a
-//! surface sends a beam of that strength onto whatever it hits. The many-light solution has these spikes
-//! (they are the VPLs' glints), but a cache's distributions are built with the cache's own lobe and region,
-//! so they neither predict which VPL a neighbour's lobe meets nor which receivers a VPL's beam lights: the
-//! spikes were found rarely and then with a tiny probability — fireflies and holes that decided the scene's
-//! RMSE (in a 320×180 bathroom, 0.1 % of the pixels held 96–99 % of the squared error of every estimator).
+//! Why, near-specular lobes: a reflection lobe of roughness 0.001–0.01 (the bathroom's bathtub, vase and
+//! taps) turns the one VPL it happens to point at into a spike hundreds of times the pixel's diffuse light,
+//! and a VPL on such a surface sends a beam of that strength onto whatever it hits. The many-light solution
+//! has these spikes (they are the VPLs' glints), but a cache's distributions are built with the cache's own
+//! lobe and region, so they neither predict which VPL a neighbour's lobe meets nor which receivers a VPL's
+//! beam lights: the spikes were found rarely and then with a tiny probability — fireflies and holes that
+//! decided the scene's RMSE (in a 320×180 bathroom, 0.1 % of the pixels held 96–99 % of the squared error
+//! of every estimator).
 //!
-//! What: for a shading point s, the set S(s) holds every VPL whose direction from s lies in the cone of s's
-//! sharp lobes ([`sharp_cone`]), and every VPL with a sharp lobe whose beam cone contains s. The VPL sum
-//! splits exactly: Σ_j I_j(s) = Σ_{j∈S(s)} I_j(s) + Σ_{j∉S(s)} I_j(s). The first part is estimated at s
-//! itself with one shadow ray — one member drawn in proportion to its exact unoccluded contribution there,
-//! so only its visibility is left to chance; the second is the usual estimator with every draw that lands
-//! in S(s) counted as 0. S(s) depends on s alone, never on a draw, so both parts stay unbiased for their
-//! sums and the whole for the same VPL image (`placement none` is unchanged). A lobe counts as sharp where
-//! its microfacet density exceeds [`D_MIN`] within a cone narrower than the `splitcone` angle; wider lobes
-//! are left to the estimator (their cones would hold hundreds of VPLs).
+//! Why, near VPLs: within d_c of a receiver a VPL's light is at its clamped maximum (1/d_c² instead of
+//! 1/d²), yet the caches, a little farther away and often on another facet, may see it behind their tangent
+//! plane or occluded and give it no density, so only the uniform technique draws it, with probability
+//! 1/(4·VPLs) — after the lobes were split off, such draws were the bathroom's largest fireflies (a VPL
+//! 0.02 from a receiver on a bevel, none of its two caches able to draw it, one pixel 225 against 15).
+//! The standard power estimator suffers from them alike (its weight is Σflux·f/d²).
+//!
+//! What: for a shading point s, the set S(s) holds every positional VPL within `near` (= `splitnear`·d_c)
+//! of s, every VPL whose direction from s lies in the cone of s's sharp lobes ([`sharp_cone`]), and every
+//! VPL with a sharp lobe whose beam cone contains s. The VPL sum splits exactly: Σ_j I_j(s) = Σ_{j∈S(s)}
+//! I_j(s) + Σ_{j∉S(s)} I_j(s). The first part is estimated at s itself with one shadow ray — one member
+//! drawn in proportion to its exact unoccluded contribution there, so only its visibility is left to
+//! chance; the second is the usual estimator with every draw that lands in S(s) counted as 0. S(s) depends
+//! on s alone, never on a draw, so both parts stay unbiased for their sums and the whole for the same VPL
+//! image (`placement none` is unchanged). A lobe counts as sharp where its microfacet density exceeds
+//! [`D_MIN`] within a cone narrower than the `splitcone` angle; wider lobes are left to the estimator
+//! (their cones would hold hundreds of VPLs). The ball holds a handful of VPLs (the VPLs lie on surfaces,
+//! and d_c is 2.5 % of the scene's diagonal).
 //!
 //! Depends on the VPLs and the shading layer's lobes; never on placement or the caches.
 
@@ -37,7 +47,7 @@ use crate::shading::{Spectrum, luminance};
 /// lobe's value is of the order of a diffuse one's (1/π), which the cached distributions handle.
 pub const D_MIN: f32 = 1.0;
 
-/// VPLs per leaf of the cone-query tree.
+/// VPLs per leaf of the query tree.
 const LEAF: usize = 8;
 
 /// A cone of unit directions around `axis` with half-angle `angle`.
@@ -87,7 +97,7 @@ pub fn sharp_cone(bsdf: &Bsdf, wo: Vec3A, max_angle: f32) -> Option<Cone> {
     axis.is_finite().then(|| Cone { axis, cos: angle.cos(), angle })
 }
 
-/// A node of the cone-query tree: a bounding sphere of VPLs `lo..hi` (in the VPL list's Morton order);
+/// A node of the query tree: a bounding sphere of VPLs `lo..hi` (in the VPL list's Morton order);
 /// the nodes are stored in preorder and `skip` is the index past this node's subtree.
 #[derive(Clone, Copy, Debug)]
 struct Node {
@@ -98,12 +108,14 @@ struct Node {
     skip: u32,
 }
 
-/// The split's data for a VPL set: a tree for cone queries over the positional VPLs and the beams of the
-/// VPLs with a sharp lobe.
+/// The split's data for a VPL set: a tree for ball and cone queries over the positional VPLs and the
+/// beams of the VPLs with a sharp lobe.
 #[derive(Clone, Debug, Default)]
 pub struct Split {
-    /// Widest lobe cone split off, radians (0: off).
+    /// Widest lobe cone split off, radians (0: no cones).
     max_angle: f32,
+    /// Radius of the ball around the shading point whose VPLs are split off (0: no ball).
+    near: f32,
     /// Positional VPLs are `0..positional`, directional ones after them.
     positional: usize,
     nodes: Vec<Node>,
@@ -113,7 +125,7 @@ pub struct Split {
     beams: Vec<(u32, Vec3A, Cone)>,
 }
 
-/// The split at one shading point: its apex and lobe cone.
+/// The split at one shading point: its apex (the centre of the ball) and lobe cone.
 #[derive(Clone, Copy, Debug)]
 pub struct Local<'a> {
     split: &'a Split,
@@ -122,14 +134,20 @@ pub struct Local<'a> {
 }
 
 impl Split {
-    /// The split for `vpls` with lobe cones up to `max_angle` radians (0: no split at all).
-    pub fn new(vpls: &Vpls, max_angle: f32) -> Split {
-        if max_angle.is_nan() || max_angle <= 0.0 || vpls.is_empty() {
+    /// The split for `vpls` with lobe cones up to `max_angle` radians (0: no cones) and the VPLs within
+    /// distance `near` of the shading point (0: none).
+    pub fn new(vpls: &Vpls, max_angle: f32, near: f32) -> Split {
+        let max_angle = if max_angle > 0.0 { max_angle } else { 0.0 };
+        let near = if near > 0.0 && near.is_finite() { near } else { 0.0 };
+        if (max_angle == 0.0 && near == 0.0) || vpls.is_empty() {
             return Split::default();
         }
         let positional = vpls.list.iter().take_while(|v| !matches!(v.emitter, Emitter::Directional)).count();
-        let mut split = Split { max_angle, positional, beam_of: vec![u32::MAX; vpls.len()], ..Split::default() };
+        let mut split = Split { max_angle, near, positional, beam_of: vec![u32::MAX; vpls.len()], ..Split::default() };
         split.build(vpls, 0, positional);
+        if max_angle == 0.0 {
+            return split;
+        }
         for (j, v) in vpls.list.iter().enumerate() {
             if let Emitter::Bsdf { index } = v.emitter {
                 let g = &vpls.bsdfs[index as usize];
@@ -145,7 +163,7 @@ impl Split {
 
     /// Whether nothing is ever split off.
     pub fn is_off(&self) -> bool {
-        self.max_angle <= 0.0
+        self.max_angle <= 0.0 && self.near <= 0.0
     }
 
     /// VPLs with a sharp lobe (a beam).
@@ -178,18 +196,22 @@ impl Split {
     /// The split at receiver `x`.
     #[inline]
     pub fn at<'a>(&'a self, x: &Receiver) -> Local<'a> {
-        let cone = if self.is_off() { None } else { sharp_cone(&x.bsdf, x.wo, self.max_angle) };
+        let cone = if self.max_angle <= 0.0 { None } else { sharp_cone(&x.bsdf, x.wo, self.max_angle) };
         Local { split: self, apex: x.si.p, cone }
     }
 }
 
 impl Local<'_> {
-    /// Whether the receiver's lobe cone holds VPL `j`, or `j`'s beam holds the receiver: j ∈ S(s).
+    /// Whether VPL `j` is near the receiver, or the receiver's lobe cone holds it, or `j`'s beam holds
+    /// the receiver: j ∈ S(s).
     #[inline]
     pub fn holds(&self, vpls: &Vpls, j: usize) -> bool {
         let sp = self.split;
         if sp.is_off() {
             return false;
+        }
+        if self.in_ball(vpls, j) {
+            return true;
         }
         if let Some(cone) = &self.cone
             && self.in_cone(vpls, cone, j)
@@ -200,6 +222,13 @@ impl Local<'_> {
             Some(&b) if b != u32::MAX => self.in_beam(b as usize),
             _ => false,
         }
+    }
+
+    /// Whether positional VPL `j` lies within the split's `near` distance of the apex.
+    #[inline]
+    fn in_ball(&self, vpls: &Vpls, j: usize) -> bool {
+        let near = self.split.near;
+        near > 0.0 && j < self.split.positional && (vpls.list[j].p - self.apex).length_squared() < near * near
     }
 
     #[inline]
@@ -220,23 +249,27 @@ impl Local<'_> {
     /// Calls `f` with every member of S(s), each once.
     pub fn for_each(&self, vpls: &Vpls, mut f: impl FnMut(usize)) {
         let sp = self.split;
-        if let Some(cone) = &self.cone {
+        if self.cone.is_some() || sp.near > 0.0 {
             let mut i = 0;
             while i < sp.nodes.len() {
                 let n = &sp.nodes[i];
-                if !self.sphere_meets(cone, n.center, n.radius) {
+                let meets_ball =
+                    sp.near > 0.0 && (n.center - self.apex).length_squared() <= (n.radius + sp.near).powi(2);
+                if !meets_ball && !self.cone.is_some_and(|c| self.sphere_meets(&c, n.center, n.radius)) {
                     i = n.skip as usize;
                     continue;
                 }
                 if n.hi - n.lo <= LEAF as u32 {
                     for j in n.lo as usize..n.hi as usize {
-                        if self.in_cone(vpls, cone, j) {
+                        if self.in_ball(vpls, j) || self.cone.is_some_and(|c| self.in_cone(vpls, &c, j)) {
                             f(j);
                         }
                     }
                 }
                 i += 1;
             }
+        }
+        if let Some(cone) = &self.cone {
             for j in sp.positional..vpls.len() {
                 if self.in_cone(vpls, cone, j) {
                     f(j);
@@ -245,7 +278,7 @@ impl Local<'_> {
         }
         for (b, &(j, _, _)) in sp.beams.iter().enumerate() {
             let j = j as usize;
-            if self.in_beam(b) && !self.cone.is_some_and(|c| self.in_cone(vpls, &c, j)) {
+            if self.in_beam(b) && !self.in_ball(vpls, j) && !self.cone.is_some_and(|c| self.in_cone(vpls, &c, j)) {
                 f(j);
             }
         }
@@ -377,28 +410,39 @@ mod tests {
     fn the_tree_query_finds_exactly_the_members_once() {
         let mut rng = Rng::new(17);
         let v = vpls(&mut rng);
-        let split = Split::new(&v, 0.5);
-        assert_eq!(split.beam_count(), 300, "every sharp VPL has a beam");
-        let mut members = 0;
-        for k in 0..300 {
-            let apex = Vec3A::new(4.0 * rng.uniform() - 2.0, 4.0 * rng.uniform() - 2.0, 2.0 * rng.uniform() - 0.5);
-            let axis = crate::sampling::warp::uniform_sphere(rng.uniform2());
-            let angle = 0.01 + 0.4 * rng.uniform();
-            let cone = (k % 5 != 0).then_some(Cone { axis, cos: angle.cos(), angle });
-            let local = Local { split: &split, apex, cone };
-            let mut found = Vec::new();
-            local.for_each(&v, |j| found.push(j));
-            let mut unique = found.clone();
-            unique.sort_unstable();
-            unique.dedup();
-            assert_eq!(unique.len(), found.len(), "a member came twice");
-            let want: Vec<usize> = (0..v.len()).filter(|&j| local.holds(&v, j)).collect();
-            assert_eq!(unique, want, "apex {apex:?} cone {cone:?}");
-            members += want.len();
+        // Cones alone, a ball alone, and both.
+        for (angle, near) in [(0.5, 0.0), (0.0, 0.3), (0.5, 0.3)] {
+            let split = Split::new(&v, angle, near);
+            assert_eq!(split.beam_count(), if angle > 0.0 { 300 } else { 0 }, "every sharp VPL has a beam");
+            let (mut members, mut in_ball) = (0, 0);
+            for k in 0..300 {
+                let apex = Vec3A::new(4.0 * rng.uniform() - 2.0, 4.0 * rng.uniform() - 2.0, 2.0 * rng.uniform() - 0.5);
+                let axis = crate::sampling::warp::uniform_sphere(rng.uniform2());
+                let half = 0.01 + 0.4 * rng.uniform();
+                let cone = (k % 5 != 0 && angle > 0.0).then_some(Cone { axis, cos: half.cos(), angle: half });
+                let local = Local { split: &split, apex, cone };
+                let mut found = Vec::new();
+                local.for_each(&v, |j| found.push(j));
+                let mut unique = found.clone();
+                unique.sort_unstable();
+                unique.dedup();
+                assert_eq!(unique.len(), found.len(), "a member came twice");
+                let want: Vec<usize> = (0..v.len()).filter(|&j| local.holds(&v, j)).collect();
+                assert_eq!(unique, want, "apex {apex:?} cone {cone:?}");
+                members += want.len();
+                // The ball is what its name says: the positional VPLs closer than `near`, and no other.
+                let close = |j: usize| j < split.positional && (v.list[j].p - apex).length() < near;
+                in_ball += (0..v.len()).filter(|&j| close(j)).count();
+                assert!((0..v.len()).filter(|&j| close(j)).all(|j| local.holds(&v, j)));
+                if angle == 0.0 {
+                    assert!(want.iter().all(|&j| close(j)), "without cones only the ball holds VPLs");
+                }
+            }
+            assert!(members > 1000, "the queries should find members ({members})");
+            assert_eq!(in_ball > 100, near > 0.0, "balls of radius {near} should hold VPLs ({in_ball})");
         }
-        assert!(members > 1000, "the queries should find members ({members})");
         // Off: nothing is ever held.
-        let off = Split::new(&v, 0.0);
+        let off = Split::new(&v, 0.0, 0.0);
         let local = Local { split: &off, apex: Vec3A::ZERO, cone: None };
         assert!((0..v.len()).all(|j| !local.holds(&v, j)));
     }
