@@ -430,8 +430,10 @@ impl Application for ImportanceCache {
         let n = cx.vpls.len();
         let mut unoccluded: Vec<f32> =
             (0..n).map(|j| cx.vpls.unoccluded_value(&cx.shading, j, &x).map_or(0.0, luminance)).collect();
-        // The VPLs of the cache's own near-specular split are drawn apart wherever they matter: left in,
-        // their spikes would take the whole distribution.
+        // The VPLs of the cache's own split are drawn apart wherever they matter: left in, the spikes of
+        // its sharp lobes and the clamped maxima of its near VPLs would take most of the distribution.
+        // (Measured for the near ones: keeping them here raised the 320×180 bathroom's MSE without its worst
+        // 0.1 % of pixels from 0.0294 to 0.0316 over 12 seeds, with one seed's firefly back.)
         cx.split.at(&x).for_each(&cx.vpls, |j| unoccluded[j] = 0.0);
         // A VPL whose unoccluded contribution quantises to 0 gets no shadow ray: F is 0 for it too (C still
         // draws it), and the shadow rays go to the VPLs that matter. (With every value 0 there is nothing
