@@ -1,5 +1,6 @@
 //! `cachert bench` (src/cli/bench.rs) on a scenes folder of its own: `--repeat` times each row that many
-//! times and keeps the least CPU time, listing every run; the irradiance-caching comparison refuses it.
+//! times and keeps the least CPU time, listing every run; the irradiance-caching comparison refuses it, and
+//! `--seeds` (its own) is refused elsewhere.
 //! (The comparisons with pbrt-v3 and pbrt-v2 themselves are benchmarks, run by hand: see results/bench.)
 
 mod common;
@@ -49,4 +50,16 @@ fn the_irradiance_caching_comparison_refuses_repeat() {
         .expect("the binary runs");
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--repeat"));
+}
+
+#[test]
+fn seeds_apply_to_the_irradiance_caching_comparison_only() {
+    let dir = TempDir::new("bench-seeds");
+    let out = Command::new(env!("CARGO_BIN_EXE_cachert"))
+        .args(["bench", "--integrator", "path", "--seeds", "3", "--scenes"])
+        .arg(&dir.0)
+        .output()
+        .expect("the binary runs");
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--seeds applies to the irradiance-caching comparison"));
 }

@@ -79,6 +79,10 @@ pub struct BenchArgs {
     /// (the run least disturbed by other work on a shared machine; every run's figure is in the JSON).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
     pub repeat: u32,
+    /// With `--integrator` naming irradiance caching: render each cachert row at seeds 0..N−1 and report
+    /// the mean and standard deviation of its errors (pbrt-v2 has no seed: its rows are single runs).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
+    pub seeds: u32,
 }
 
 /// The scenes `directlighting` and `path` are timed on (the bench scenes with light sources).
@@ -228,6 +232,12 @@ pub fn run(args: &BenchArgs) -> Result<String> {
     }
     if args.integrator == <IrradianceCache as Application>::NAME {
         return super::irc_peer::run(args);
+    }
+    if args.seeds > 1 {
+        return Err(Error::usage(
+            "--seeds applies to the irradiance-caching comparison (--integrator irradiancecache); the other rows \
+             are timings of one image",
+        ));
     }
     // pbrt-v3 runs in each scene's folder, so a relative path must be made absolute first.
     let pbrt = match &args.pbrt {

@@ -9,7 +9,12 @@
 //! `path-ref.pbrt` with the Integrator replaced by `irradiancecache` `output full` `maxdepth 4` (the same
 //! light paths as pbrt-v3 `path` maxdepth 5) and the same Sampler, over cache budgets and placements, in
 //! this process. CPU time is user + system of the whole render (pbrt-v2: its child process, parsing
-//! included; cachert: parsing to image). A benchmark prints figures from one run and asserts nothing.
+//! included; cachert: parsing to image). With `--seeds N` every cachert row is rendered at seeds 0..N−1 and
+//! shows the mean of its figures and the standard deviation of its errors over the seeds; pbrt-v2 has no
+//! seed (its random numbers are seeded per task), so its rows are single runs. After the table, the
+//! issue's target is checked against pbrt-v2's defaults: for each placement, the cheapest budget within half
+//! of their CPU time that reaches their error off the light, and whether it also does over the whole image.
+//! A benchmark prints figures from one run and asserts nothing.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -64,6 +69,101 @@ pub struct PeerRow {
     pub mean_pct: f64,
     /// Off-light mean relative to the reference's, percent.
     pub mean_off_light_pct: f64,
+    /// Seeds the figures are the mean over (1: a single run).
+    pub seeds: u32,
+    /// Standard deviations over the seeds of `rmse`, `rmse_off_light` and `flip` (`None` for one run).
+    pub sd: Option<[f64; 3]>,
+}
+
+/// pbrt-v2's default setting, the target's row.
+pub const V2_DEFAULTS: &str = "minweight 0.5 nsamples 4096";
+
+/// The mean and sample standard deviation of `values` (the deviation `None` for fewer than two).
+fn mean_sd(values: &[f64]) -> (f64, Option<f64>) {
+    let n = values.len().max(1) as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let sd = (values.len() > 1)
+        .then(|| (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (values.len() - 1) as f64).sqrt());
+    (mean, sd)
+}
+
+/// One measured run: its error figures (RMSE, RMSE off-light, FLIP, mean %, off-light mean %), CPU and
+/// wall seconds, and the wall seconds of caching and of the per-pixel work.
+struct Run {
+    errors: [f64; 5],
+    times: [f64; 2],
+    split: [Option<f64>; 2],
+}
+
+/// The row of `runs` (one per seed): means of every figure, deviations of the errors.
+fn summarise(renderer: &str, series: &str, setting: String, runs: &[Run]) -> PeerRow {
+    let column = |f: &dyn Fn(&Run) -> f64| mean_sd(&runs.iter().map(f).collect::<Vec<_>>());
+    let opt = |k: usize| {
+        let v: Vec<f64> = runs.iter().filter_map(|r| r.split[k]).collect();
+        (v.len() == runs.len()).then(|| mean_sd(&v).0)
+    };
+    let [rmse, off, flip] = [0, 1, 2].map(|k| column(&|r| r.errors[k]));
+    PeerRow {
+        renderer: renderer.into(),
+        series: series.into(),
+        setting,
+        cpu_s: column(&|r| r.times[0]).0,
+        wall_s: column(&|r| r.times[1]).0,
+        caching_wall_s: opt(0),
+        pixels_wall_s: opt(1),
+        rmse: rmse.0,
+        rmse_off_light: off.0,
+        flip: flip.0,
+        mean_pct: column(&|r| r.errors[3]).0,
+        mean_off_light_pct: column(&|r| r.errors[4]).0,
+        seeds: runs.len() as u32,
+        sd: match (rmse.1, off.1, flip.1) {
+            (Some(a), Some(b), Some(c)) => Some([a, b, c]),
+            _ => None,
+        },
+    }
+}
+
+/// The verdict on the target: pbrt-v2's error at its defaults in at most half of its CPU time.
+fn verdict(rows: &[PeerRow]) -> String {
+    let Some(v2) = rows.iter().find(|r| r.renderer == "pbrt-v2" && r.setting == V2_DEFAULTS) else {
+        return String::new();
+    };
+    let limit = 0.5 * v2.cpu_s;
+    let mut s = format!(
+        "\nTarget: pbrt-v2's defaults took {:.1} CPU s for RMSE {:.5} whole / {:.5} off the light; cachert must \
+         reach those in at most {limit:.1} CPU s.\n",
+        v2.cpu_s, v2.rmse, v2.rmse_off_light
+    );
+    let mut series: Vec<&str> = Vec::new();
+    for r in rows.iter().filter(|r| r.renderer == "cachert") {
+        if !series.contains(&r.series.as_str()) {
+            series.push(&r.series);
+        }
+    }
+    for name in series {
+        let within = rows.iter().filter(|r| r.renderer == "cachert" && r.series == name && r.cpu_s <= limit);
+        let best = within.filter(|r| r.rmse_off_light <= v2.rmse_off_light).min_by(|a, b| a.cpu_s.total_cmp(&b.cpu_s));
+        let _ = match best {
+            Some(r) => writeln!(
+                s,
+                "- {name}: off the light met by {} ({:.1} CPU s, {:.2}x; {:.5}); whole image {} ({:.5}{})",
+                r.setting,
+                r.cpu_s,
+                r.cpu_s / v2.cpu_s,
+                r.rmse_off_light,
+                if r.rmse <= v2.rmse { "met" } else { "not met" },
+                r.rmse,
+                r.sd.map_or(String::new(), |sd| format!(" ± {:.5} over {} seeds", sd[0], r.seeds)),
+            ),
+            None => writeln!(
+                s,
+                "- {name}: no budget within {limit:.1} CPU s reaches {:.5} off the light",
+                v2.rmse_off_light
+            ),
+        };
+    }
+    s
 }
 
 /// The pixels off the emitter: those whose 3×3 neighbourhood (wrapping at the borders) holds no reference
@@ -222,32 +322,13 @@ pub fn run(args: &BenchArgs) -> Result<String> {
     let scratch = std::env::temp_dir().join(format!("cachert-irc-peer-{}", std::process::id()));
     std::fs::create_dir_all(&scratch).map_err(|e| Error::file(&scratch, e.to_string()))?;
     let mut rows = Vec::new();
-    let mut row = |renderer: &str,
-                   series: &str,
-                   setting: String,
-                   img: &Image,
-                   times: [f64; 2],
-                   split: [Option<f64>; 2]|
-     -> Result<()> {
-        let [cpu, wall] = times;
+    let measure = |img: &Image, times: [f64; 2], split: [Option<f64>; 2]| -> Result<Run> {
         let (rmse, rmse_off_light, flip, mean_pct, mean_off_light_pct) = judge(img, &reference, &mask)?;
-        let r = PeerRow {
-            renderer: renderer.into(),
-            series: series.into(),
-            setting,
-            cpu_s: cpu,
-            wall_s: wall,
-            caching_wall_s: split[0],
-            pixels_wall_s: split[1],
-            rmse,
-            rmse_off_light,
-            flip,
-            mean_pct,
-            mean_off_light_pct,
-        };
-        eprintln!("{}", format_row(&r));
-        rows.push(r);
-        Ok(())
+        Ok(Run { errors: [rmse, rmse_off_light, flip, mean_pct, mean_off_light_pct], times, split })
+    };
+    let mut push = |row: PeerRow| {
+        eprintln!("{}", format_row(&row));
+        rows.push(row);
     };
     for (minweight, nsamples) in PBRT_V2_SETTINGS {
         let t = set_param(&v2_text, "\"float minweight\"", &minweight.to_string())?;
@@ -255,26 +336,32 @@ pub fn run(args: &BenchArgs) -> Result<String> {
         let v = run_pbrt_v2(pbrt_v2, &t, &scratch, args.nthreads)?;
         let series = if nsamples == 4096 { "pbrt-v2 minweight" } else { "pbrt-v2 nsamples" };
         let setting = format!("minweight {minweight} nsamples {nsamples}");
-        row("pbrt-v2", series, setting, &v.image, [v.cpu, v.wall], [v.priming, v.render])?;
+        let run = measure(&v.image, [v.cpu, v.wall], [v.priming, v.render])?;
+        push(summarise("pbrt-v2", series, setting, &[run]));
     }
     let _ = std::fs::remove_dir_all(&scratch);
     for placement in PLACEMENTS {
         for caches in BUDGETS {
-            let settings = RenderSettings {
-                threads: Some(args.nthreads),
-                set: vec![("placement".into(), placement.into()), ("caches".into(), caches.to_string())],
-                ..Default::default()
-            };
-            let (cpu0, t) = (process_cpu_secs().unwrap_or(0.0), Instant::now());
-            let loaded = load_str(&text, &ref_path, LoadOptions::default())?;
-            let out = render(&loaded.scene, loaded.integrator.as_ref(), &settings, &mut Warnings::default())?;
-            let (cpu, wall) = (process_cpu_secs().unwrap_or(0.0) - cpu0, t.elapsed().as_secs_f64());
-            let split = out.cache.as_ref().map(|c| {
-                let t = &c.stats.times;
-                [t.initial_computation + t.adaptive_computation, t.render + t.per_pixel_term]
-            });
-            let split = split.map_or([None, None], |[a, b]| [Some(a), Some(b)]);
-            row("cachert", placement, format!("caches {caches}"), &out.image, [cpu, wall], split)?;
+            let mut runs = Vec::new();
+            for seed in 0..u64::from(args.seeds) {
+                let settings = RenderSettings {
+                    seed,
+                    threads: Some(args.nthreads),
+                    set: vec![("placement".into(), placement.into()), ("caches".into(), caches.to_string())],
+                    ..Default::default()
+                };
+                let (cpu0, t) = (process_cpu_secs().unwrap_or(0.0), Instant::now());
+                let loaded = load_str(&text, &ref_path, LoadOptions::default())?;
+                let out = render(&loaded.scene, loaded.integrator.as_ref(), &settings, &mut Warnings::default())?;
+                let (cpu, wall) = (process_cpu_secs().unwrap_or(0.0) - cpu0, t.elapsed().as_secs_f64());
+                let split = out.cache.as_ref().map(|c| {
+                    let t = &c.stats.times;
+                    [t.initial_computation + t.adaptive_computation, t.render + t.per_pixel_term]
+                });
+                let split = split.map_or([None, None], |[a, b]| [Some(a), Some(b)]);
+                runs.push(measure(&out.image, [cpu, wall], split)?);
+            }
+            push(summarise("cachert", placement, format!("caches {caches}"), &runs));
         }
     }
     if let Some(json) = &args.json {
@@ -284,22 +371,27 @@ pub fn run(args: &BenchArgs) -> Result<String> {
     if let Some(chart) = &args.chart {
         super::peer_chart::write(&rows, chart)?;
     }
-    Ok(table(&rows))
+    Ok(table(&rows) + &verdict(&rows))
 }
 
 fn format_row(r: &PeerRow) -> String {
+    let with_sd = |k: usize, v: f64, digits: usize| match r.sd {
+        Some(sd) => format!("{v:.digits$} ± {:.digits$}", sd[k]),
+        None => format!("{v:.digits$}"),
+    };
     format!(
-        "| {} | {} | {} | {:.1} | {:.1} | {} + {} | {:.5} | {:.5} | {:.4} | {:+.2}% | {:+.2}% |",
+        "| {} | {} | {} | {} | {:.1} | {:.1} | {} + {} | {} | {} | {} | {:+.2}% | {:+.2}% |",
         r.renderer,
         r.series,
         r.setting,
+        r.seeds,
         r.cpu_s,
         r.wall_s,
         r.caching_wall_s.map_or("?".into(), |s| format!("{s:.1}")),
         r.pixels_wall_s.map_or("?".into(), |s| format!("{s:.1}")),
-        r.rmse,
-        r.rmse_off_light,
-        r.flip,
+        with_sd(0, r.rmse, 5),
+        with_sd(1, r.rmse_off_light, 5),
+        with_sd(2, r.flip, 4),
         r.mean_pct,
         r.mean_off_light_pct
     )
@@ -307,8 +399,8 @@ fn format_row(r: &PeerRow) -> String {
 
 fn table(rows: &[PeerRow]) -> String {
     let mut s = String::from(
-        "| renderer | series | setting | CPU s | wall s | wall s: caching + pixels | RMSE | RMSE off-light | HDR-FLIP | mean | off-light mean |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| renderer | series | setting | seeds | CPU s | wall s | wall s: caching + pixels | RMSE | RMSE off-light | HDR-FLIP | mean | off-light mean |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let _ = writeln!(s, "{}", format_row(r));
@@ -344,6 +436,50 @@ mod tests {
         let (rmse, rmse_off, _, pct, pct_off) = judge(&test, &reference, &[true; 4]).unwrap();
         assert!((rmse - rmse_off).abs() < 1e-7 && rmse > 0.0, "{rmse} {rmse_off}");
         assert!((pct - pct_off).abs() < 1e-5 && pct > 0.0, "{pct} {pct_off}");
+    }
+
+    fn row(renderer: &str, series: &str, setting: &str, cpu: f64, errors: [f64; 2]) -> PeerRow {
+        let run = Run { errors: [errors[0], errors[1], 0.05, 0.0, 0.0], times: [cpu, cpu / 2.0], split: [None; 2] };
+        summarise(renderer, series, setting.into(), &[run])
+    }
+
+    #[test]
+    fn a_row_over_seeds_holds_the_means_and_the_deviations_of_the_errors() {
+        let run = |e: f64, cpu: f64| Run {
+            errors: [e, e / 2.0, e * 10.0, 0.1, 0.2],
+            times: [cpu, 1.0],
+            split: [Some(1.0), None],
+        };
+        let r = summarise("cachert", "vgc", "caches 10".into(), &[run(1.0, 2.0), run(3.0, 4.0)]);
+        assert_eq!((r.seeds, r.rmse, r.rmse_off_light, r.flip, r.cpu_s), (2, 2.0, 1.0, 20.0, 3.0));
+        let sd = r.sd.unwrap();
+        let s2 = 2f64.sqrt();
+        assert!((sd[0] - s2).abs() < 1e-12 && (sd[1] - s2 / 2.0).abs() < 1e-12 && (sd[2] - 10.0 * s2).abs() < 1e-9);
+        assert_eq!((r.caching_wall_s, r.pixels_wall_s), (Some(1.0), None), "a split missing in a run is unknown");
+        let one = summarise("pbrt-v2", "x", "y".into(), &[run(1.0, 2.0)]);
+        assert_eq!((one.seeds, one.sd), (1, None));
+        assert!(format_row(&r).contains("2.00000 ± 1.41421") && !format_row(&one).contains('±'));
+    }
+
+    #[test]
+    fn the_verdict_takes_the_cheapest_budget_within_half_the_time_that_meets_off_light() {
+        let rows = [
+            row("pbrt-v2", "pbrt-v2 minweight", V2_DEFAULTS, 40.0, [0.005, 0.002]),
+            row("cachert", "vgc", "caches 1000", 10.0, [0.0049, 0.0025]),
+            row("cachert", "vgc", "caches 2000", 15.0, [0.0052, 0.0019]),
+            row("cachert", "vgc", "caches 3000", 18.0, [0.0048, 0.0018]),
+            row("cachert", "vgc", "caches 8000", 30.0, [0.0040, 0.0010]),
+            row("cachert", "im", "caches 1000", 12.0, [0.0060, 0.0030]),
+            row("cachert", "im", "caches 8000", 30.0, [0.0040, 0.0010]),
+        ];
+        let v = verdict(&rows);
+        assert!(v.contains("at most 20.0 CPU s"), "{v}");
+        assert!(
+            v.contains("- vgc: off the light met by caches 2000 (15.0 CPU s, 0.38x; 0.00190); whole image not met"),
+            "{v}"
+        );
+        assert!(v.contains("- im: no budget within 20.0 CPU s reaches 0.00200 off the light"), "{v}");
+        assert_eq!(verdict(&rows[1..]), "", "no verdict without pbrt-v2's defaults");
     }
 
     #[test]

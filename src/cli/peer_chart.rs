@@ -1,6 +1,7 @@
 //! The error-versus-CPU-time chart of `cachert bench --integrator irradiancecache` (SVG): two panels, RMSE
 //! over the whole image and off the light, against CPU seconds on a log axis, one line per series
-//! (pbrt-v2's `minweight` and `nsamples` sweeps, one per cachert placement over cache budgets).
+//! (pbrt-v2's `minweight` and `nsamples` sweeps, one per cachert placement over cache budgets; with
+//! `--seeds` a cachert point is the mean over the seeds).
 //!
 //! Reads only the rows the bench measured; draws with plotters' SVG backend.
 
@@ -10,7 +11,7 @@ use plotters::prelude::*;
 
 use crate::error::{Error, Result};
 
-use super::irc_peer::PeerRow;
+use super::irc_peer::{PeerRow, V2_DEFAULTS};
 use crate::experiment::chart::{PALETTE, tick};
 
 /// Writes the chart of `rows` to `path`.
@@ -31,7 +32,7 @@ pub fn write(rows: &[PeerRow], path: &Path) -> Result<()> {
     let metrics: [(&str, Metric); 2] =
         [("RMSE, whole image", |r| r.rmse), ("RMSE, off the light", |r| r.rmse_off_light)];
     // The target: at most half of pbrt-v2's CPU time at its defaults, at or below its error there.
-    let v2_default = rows.iter().find(|r| r.renderer == "pbrt-v2" && r.setting == "minweight 0.5 nsamples 4096");
+    let v2_default = rows.iter().find(|r| r.renderer == "pbrt-v2" && r.setting == V2_DEFAULTS);
     for (panel, (title, metric)) in panels.iter().zip(metrics) {
         let hi = rows.iter().map(metric).fold(0.0f64, f64::max) * 1.1;
         let lo = rows.iter().map(metric).fold(f64::INFINITY, f64::min) * 0.9;
