@@ -234,10 +234,11 @@ pub fn run(args: &BenchArgs) -> Result<String> {
         return super::irc_peer::run(args);
     }
     if args.seeds > 1 {
-        return Err(Error::usage(
-            "--seeds applies to the irradiance-caching comparison (--integrator irradiancecache); the other rows \
-             are timings of one image",
-        ));
+        return Err(Error::usage(format!(
+            "--seeds applies to the irradiance-caching comparison (--integrator {}); the other rows are timings \
+             of one image",
+            <IrradianceCache as Application>::NAME
+        )));
     }
     // pbrt-v3 runs in each scene's folder, so a relative path must be made absolute first.
     let pbrt = match &args.pbrt {
