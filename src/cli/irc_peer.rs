@@ -24,6 +24,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::error::{Error, Result, Warnings};
+use crate::experiment::summary::Summary;
 use crate::image::{self, Image};
 use crate::metrics::{Metric, compare, rmse};
 use crate::render::{RenderSettings, render};
@@ -78,15 +79,6 @@ pub struct PeerRow {
 /// pbrt-v2's default setting, the target's row.
 pub const V2_DEFAULTS: &str = "minweight 0.5 nsamples 4096";
 
-/// The mean and sample standard deviation of `values` (the deviation `None` for fewer than two).
-fn mean_sd(values: &[f64]) -> (f64, Option<f64>) {
-    let n = values.len().max(1) as f64;
-    let mean = values.iter().sum::<f64>() / n;
-    let sd = (values.len() > 1)
-        .then(|| (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (values.len() - 1) as f64).sqrt());
-    (mean, sd)
-}
-
 /// One measured run: its error figures (RMSE, RMSE off-light, FLIP, mean %, off-light mean %), CPU and
 /// wall seconds, and the wall seconds of caching and of the per-pixel work.
 struct Run {
@@ -97,11 +89,12 @@ struct Run {
 
 /// The row of `runs` (one per seed): means of every figure, deviations of the errors.
 fn summarise(renderer: &str, series: &str, setting: String, runs: &[Run]) -> PeerRow {
-    let column = |f: &dyn Fn(&Run) -> f64| mean_sd(&runs.iter().map(f).collect::<Vec<_>>());
-    let opt = |k: usize| {
-        let v: Vec<f64> = runs.iter().filter_map(|r| r.split[k]).collect();
-        (v.len() == runs.len()).then(|| mean_sd(&v).0)
+    // (mean, deviation: `None` for one run) of a figure over the runs.
+    let column = |f: &dyn Fn(&Run) -> f64| {
+        Summary::of(runs.iter().map(f)).map_or((f64::NAN, None), |s| (s.mean, (s.n > 1).then_some(s.sd)))
     };
+    // A split only when every run has it.
+    let opt = |k: usize| runs.iter().all(|r| r.split[k].is_some()).then(|| column(&|r| r.split[k].unwrap_or(0.0)).0);
     let [rmse, off, flip] = [0, 1, 2].map(|k| column(&|r| r.errors[k]));
     PeerRow {
         renderer: renderer.into(),
@@ -124,6 +117,17 @@ fn summarise(renderer: &str, series: &str, setting: String, runs: &[Run]) -> Pee
     }
 }
 
+/// The series of `rows`, each once, in the order they first appear.
+pub fn series_names<'a>(rows: impl Iterator<Item = &'a PeerRow>) -> Vec<&'a str> {
+    let mut names: Vec<&str> = Vec::new();
+    for r in rows {
+        if !names.contains(&r.series.as_str()) {
+            names.push(&r.series);
+        }
+    }
+    names
+}
+
 /// The verdict on the target: pbrt-v2's error at its defaults in at most half of its CPU time.
 fn verdict(rows: &[PeerRow]) -> String {
     let Some(v2) = rows.iter().find(|r| r.renderer == "pbrt-v2" && r.setting == V2_DEFAULTS) else {
@@ -135,13 +139,7 @@ fn verdict(rows: &[PeerRow]) -> String {
          reach those in at most {limit:.1} CPU s.\n",
         v2.cpu_s, v2.rmse, v2.rmse_off_light
     );
-    let mut series: Vec<&str> = Vec::new();
-    for r in rows.iter().filter(|r| r.renderer == "cachert") {
-        if !series.contains(&r.series.as_str()) {
-            series.push(&r.series);
-        }
-    }
-    for name in series {
+    for name in series_names(rows.iter().filter(|r| r.renderer == "cachert")) {
         let within = rows.iter().filter(|r| r.renderer == "cachert" && r.series == name && r.cpu_s <= limit);
         let best = within.filter(|r| r.rmse_off_light <= v2.rmse_off_light).min_by(|a, b| a.cpu_s.total_cmp(&b.cpu_s));
         let _ = match best {

@@ -11,7 +11,7 @@ use plotters::prelude::*;
 
 use crate::error::{Error, Result};
 
-use super::irc_peer::{PeerRow, V2_DEFAULTS};
+use super::irc_peer::{PeerRow, V2_DEFAULTS, series_names};
 use crate::experiment::chart::{PALETTE, tick};
 
 /// Writes the chart of `rows` to `path`.
@@ -21,12 +21,7 @@ pub fn write(rows: &[PeerRow], path: &Path) -> Result<()> {
     let root = SVGBackend::new(path, (1100, 480)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| fail(e.to_string()))?;
     let panels = root.split_evenly((1, 2));
-    let mut series: Vec<&str> = Vec::new();
-    for r in rows {
-        if !series.contains(&r.series.as_str()) {
-            series.push(&r.series);
-        }
-    }
+    let series = series_names(rows.iter());
     let (cpu_lo, cpu_hi) = rows.iter().fold((f64::INFINITY, 0.0f64), |(a, b), r| (a.min(r.cpu_s), b.max(r.cpu_s)));
     type Metric = fn(&PeerRow) -> f64;
     let metrics: [(&str, Metric); 2] =
