@@ -41,19 +41,35 @@ const WEIGHTS: [u32; 256] = {
 };
 
 /// The code whose weight is nearest to `x` (in ratio), for 0 ≤ x ≤ [`MAX_WEIGHT`]; 0 below half the
-/// smallest weight. Computed from the bits of `x` without branches or library calls (this runs for every
-/// VPL of every distribution, and the loop over them vectorises): the octave e = ⌊log₂(x/16)⌋ is x's binary
-/// exponent − 4; x/2^e − 16 ∈ [0, 16) is exact and a multiple of 2⁻¹⁹, so adding ½ is exact and truncating
-/// rounds half away from zero as `f32::round` does. m = 16 (just below the next octave) gives that octave's
-/// first code, (e + 1)·16 + 1 = e·16 + m + 1. Below 16 the clamped octave 0 and a negative offset give
-/// code 1; below 8 (and NaN) the comparison gives 0.
-#[inline]
+/// smallest weight. Computed from the bits of `x` with integer operations and selects only (this runs for
+/// every VPL of every distribution, and the loop over them vectorises): for 16 ≤ x < 2²⁰ the octave is
+/// e = x's binary exponent − 4 and x/2^e − 16 = M/2¹⁹ with M the 23 mantissa bits, so rounding it half away
+/// from zero (as `f32::round` does) is (M + 2¹⁸) >> 19 ∈ 0..=16; m = 16 (just below the next octave) gives
+/// that octave's first code, (e + 1)·16 + 1 = e·16 + m + 1. Below 16 the code is 1, from 2²⁰ up (and +∞) the
+/// largest, 255; below 8, negative or NaN, 0.
+#[inline(always)]
 fn code_of(x: f32) -> u8 {
-    let e = (((x.to_bits() >> 23) & 0xff) as i32 - 127 - 4).clamp(0, 15) as u32;
-    let scaled = x * f32::from_bits((127 - e) << 23) - 16.0;
-    let m = ((scaled + 0.5) as u32).min(16);
-    let c = ((e << 4) + m + 1).min(255) as u8;
-    if x >= 8.0 { c } else { 0 }
+    let bits = x.to_bits();
+    // Non-negative floats order as their bits: 8.0 ≤ x ≤ +∞ (negative numbers and NaN fall outside).
+    let kept = (0x4100_0000..=0x7f80_0000).contains(&bits);
+    let exp = bits >> 23;
+    let m = (((bits & 0x7f_ffff) + (1 << 18)) >> 19).min(16);
+    let c = match exp {
+        ..131 => 1,
+        131..=146 => ((exp - 131) << 4) + m + 1,
+        _ => 255,
+    };
+    if kept { c.min(255) as u8 } else { 0 }
+}
+
+/// The integer weight of `code` as an f32 (exact: every weight is below 2²⁴), from the code's bits alone:
+/// (16 + m)·2^e with 2^e built as a float's exponent, so that loops over codes vectorise (a table lookup
+/// per code does not).
+#[inline(always)]
+fn weight_f32(code: u8) -> f32 {
+    let c = (code as u32).wrapping_sub(1);
+    let w = (16 + (c & 15)) as f32 * f32::from_bits((127 + ((c >> 4) & 15)) << 23);
+    if code == 0 { 0.0 } else { w }
 }
 
 /// The largest finite value of `values`, and at least 0: eight running maxima (a select, not `f32::max`,
@@ -90,13 +106,16 @@ impl Quantised {
             return None;
         }
         let to_int = MAX_WEIGHT as f32 / max;
-        let codes: Box<[u8]> =
-            weights.iter().map(|&w| if w.is_finite() && w > 0.0 { code_of(w * to_int) } else { 0 }).collect();
+        // Non-finite weights count as 0 (a select, so the loop vectorises; `code_of` gives 0 to x ≤ 0).
+        let mut codes = vec![0u8; weights.len()].into_boxed_slice();
+        for (c, &w) in codes.iter_mut().zip(weights) {
+            *c = code_of(if w.is_finite() { w * to_int } else { 0.0 });
+        }
         let mut cum = Vec::with_capacity(codes.len().div_ceil(BLOCK) + 1);
         let mut total = 0u64;
         cum.push(0);
         for block in codes.chunks(BLOCK) {
-            total += block.iter().map(|&c| WEIGHTS[c as usize] as u64).sum::<u64>();
+            total += block_weight(block);
             cum.push(total);
         }
         Some(Quantised {
@@ -135,8 +154,8 @@ impl Quantised {
     }
 
     /// Σ_j |value_a(j) − value_b(j)| over the items of `self` and `other` (the same count), skipping
-    /// blocks where both are zero, summed in eight running sums (vectorisable; a sequential f32 sum over
-    /// thousands of items is bound by the addition's latency).
+    /// blocks where both are zero, summed in eight running sums, item i into sum i mod 8 (vectorisable;
+    /// a sequential f32 sum over thousands of items is bound by the addition's latency).
     pub fn abs_diff_sum(&self, other: &Quantised) -> f32 {
         let mut lanes = [0.0f32; 8];
         for b in 0..self.cum.len() - 1 {
@@ -144,11 +163,10 @@ impl Quantised {
                 continue;
             }
             let end = ((b + 1) * BLOCK).min(self.codes.len());
-            let (ca, cb) = (&self.codes[b * BLOCK..end], &other.codes[b * BLOCK..end]);
-            for (i, (&x, &y)) in ca.iter().zip(cb).enumerate() {
-                lanes[i % 8] +=
-                    (WEIGHTS[x as usize] as f32 * self.scale - WEIGHTS[y as usize] as f32 * other.scale).abs();
-            }
+            let (sa, sb) = (self.scale, other.scale);
+            lane_sums(&mut lanes, &self.codes[b * BLOCK..end], &other.codes[b * BLOCK..end], |x, y| {
+                (weight_f32(x) * sa - weight_f32(y) * sb).abs()
+            });
         }
         lanes.iter().sum()
     }
@@ -161,9 +179,8 @@ impl Quantised {
                 continue;
             }
             let end = ((b + 1) * BLOCK).min(self.codes.len());
-            for (i, &x) in self.codes[b * BLOCK..end].iter().enumerate() {
-                lanes[i % 8] += WEIGHTS[x as usize] as f32 * self.scale;
-            }
+            let codes = &self.codes[b * BLOCK..end];
+            lane_sums(&mut lanes, codes, codes, |x, _| weight_f32(x) * self.scale);
         }
         lanes.iter().sum()
     }
@@ -206,6 +223,41 @@ impl Quantised {
     }
 }
 
+/// Σ of the integer weights of `codes`, exactly: f64 sums of integers below 2⁵³ do not round, so the
+/// eight running sums (vectorisable, unlike a table lookup per code) give the integer sum in any order.
+#[inline(always)]
+fn block_weight(codes: &[u8]) -> u64 {
+    let mut lanes = [0.0f64; 8];
+    let chunks = codes.chunks_exact(8);
+    let rest = chunks.remainder();
+    for x in chunks {
+        for k in 0..8 {
+            lanes[k] += weight_f32(x[k]) as f64;
+        }
+    }
+    for (k, &x) in rest.iter().enumerate() {
+        lanes[k] += weight_f32(x) as f64;
+    }
+    lanes.iter().sum::<f64>() as u64
+}
+
+/// Adds `term(a[i], b[i])` to `lanes[i % 8]` for every i (`a` and `b` of one length, starting at a multiple
+/// of 8 of the distribution): eight at a time, so the loop vectorises, in the order a one-at-a-time loop
+/// would add them.
+#[inline(always)]
+fn lane_sums(lanes: &mut [f32; 8], a: &[u8], b: &[u8], term: impl Fn(u8, u8) -> f32) {
+    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for k in 0..8 {
+            lanes[k] += term(x[k], y[k]);
+        }
+    }
+    for (k, (&x, &y)) in ra.iter().zip(rb).enumerate() {
+        lanes[k] += term(x, y);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -220,6 +272,11 @@ mod tests {
         for c in 1..=255u8 {
             assert_eq!(code_of(WEIGHTS[c as usize] as f32), c, "exact weights keep their code");
         }
+        for c in 0..=255u8 {
+            assert_eq!(weight_f32(c), WEIGHTS[c as usize] as f32, "{c}");
+        }
+        let codes: Vec<u8> = (0..203u32).map(|i| (i * 97 % 256) as u8).collect();
+        assert_eq!(block_weight(&codes), codes.iter().map(|&c| WEIGHTS[c as usize] as u64).sum::<u64>());
         // Every weight from 16 up is within 3.2 % of its code's weight.
         let mut x = 16.0f32;
         while x <= MAX_WEIGHT as f32 {
