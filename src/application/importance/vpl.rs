@@ -28,10 +28,10 @@ use crate::render::lighting::{PassThrough, Shading};
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::scene::geometry::SurfaceInteraction;
-use crate::scene::ray::{Ray, RayCounters};
+use crate::scene::ray::{Ray, RayCounters, offset_ray_origin};
 use crate::shading::bsdf::Bsdf;
 use crate::shading::bxdf::{Bxdf, BxdfFlags};
-use crate::shading::light::{EmitterPoint, LightSelect, SurfacePoint, spawn_ray_to};
+use crate::shading::light::{EmitterPoint, LightSelect, SHADOW_EPSILON, SurfacePoint, spawn_ray_to};
 use crate::shading::{Spectrum, luminance};
 
 /// How a VPL sends light toward a receiver.
@@ -99,6 +99,11 @@ pub struct Vpls {
     pub clamp2: f32,
     /// Each VPL's flux luminance (for power sampling).
     pub flux: Vec<f32>,
+    /// Per VPL, the end of a shadow ray to it from either side of its surface: its position offset along
+    /// its normal (index 0) and against it (index 1), as `spawn_ray_to` would offset it; made once with
+    /// the set so that the shadow rays of a cache's thousands of VPLs only choose one
+    /// ([`Vpls::shadow_ray`]). Empty for a set built by hand (the rays are then offset per call).
+    ends: Vec<[Vec3A; 2]>,
 }
 
 /// A receiver: a surface point with its BSDF and the direction it is seen from.
@@ -112,12 +117,16 @@ pub struct Receiver {
     pub wo: Vec3A,
     /// R/π when every non-specular lobe is Lambertian reflection (then f needs no lobe walk).
     lambert: Option<Spectrum>,
+    /// The origin of a shadow ray leaving the surface on the side of its geometric normal (index 0) and on
+    /// the other (index 1), as `spawn_ray_to` would offset it.
+    origins: [Vec3A; 2],
 }
 
 impl Receiver {
     /// The receiver at `si` with BSDF `bsdf`, seen from `wo`.
     pub fn new(si: SurfaceInteraction, bsdf: Bsdf, wo: Vec3A) -> Self {
-        Receiver { si, bsdf, wo, lambert: lambertian(&bsdf) }
+        let origins = [si.ng, -si.ng].map(|w| offset_ray_origin(si.p, si.p_error, si.ng, w));
+        Receiver { si, bsdf, wo, lambert: lambertian(&bsdf), origins }
     }
 
     /// f(ω_o, `wi`) over the non-specular lobes (specular ones are 0 for any given direction).
@@ -160,7 +169,14 @@ pub struct Unoccluded {
 impl Vpls {
     /// No VPLs (a scene without lights, or the start of [`Vpls::generate`]), with the distance clamp `clamp`.
     pub fn none(clamp: f32) -> Vpls {
-        Vpls { list: Vec::new(), bsdfs: Vec::new(), paths: 0, clamp2: clamp * clamp, flux: Vec::new() }
+        Vpls {
+            list: Vec::new(),
+            bsdfs: Vec::new(),
+            paths: 0,
+            clamp2: clamp * clamp,
+            flux: Vec::new(),
+            ends: Vec::new(),
+        }
     }
 
     /// Traces light paths in `scene` until `count` VPLs exist (or `64·count` paths brought none), with
@@ -231,6 +247,7 @@ impl Vpls {
             *flux *= inv;
         }
         v.sort_spatially();
+        v.ends = v.list.iter().map(|l| [l.ng, -l.ng].map(|w| offset_ray_origin(l.p, l.p_error, l.ng, w))).collect();
         v
     }
 
@@ -424,7 +441,14 @@ impl Vpls {
         if let Emitter::Directional = vpl.emitter {
             return x.si.spawn_ray(vpl.ng);
         }
-        spawn_ray_to(&x.si, &SurfacePoint { p: vpl.p, p_error: vpl.p_error, n: vpl.ng })
+        let Some(ends) = self.ends.get(j) else {
+            return spawn_ray_to(&x.si, &SurfacePoint { p: vpl.p, p_error: vpl.p_error, n: vpl.ng });
+        };
+        // `spawn_ray_to` with both offsets chosen from the precomputed pairs: offset_ray_origin flips its
+        // offset exactly when the direction's dot product with the normal is negative.
+        let origin = x.origins[((vpl.p - x.si.p).dot(x.si.ng) < 0.0) as usize];
+        let target = ends[((origin - vpl.p).dot(vpl.ng) < 0.0) as usize];
+        Ray { o: origin, d: target - origin, t_max: 1.0 - SHADOW_EPSILON }
     }
 
     /// I_j(x) with visibility (one shadow ray when the unoccluded value is not 0).
