@@ -115,8 +115,9 @@ pub struct Receiver {
     pub bsdf: Bsdf,
     /// Unit direction toward the viewer.
     pub wo: Vec3A,
-    /// R/π when every non-specular lobe is Lambertian reflection (then f needs no lobe walk).
-    lambert: Option<Spectrum>,
+    /// When every non-specular lobe is Lambertian reflection (then f needs no lobe walk): R/π (0 when
+    /// `wo` lies in the shading frame's plane), and ω_o · n_g, whose sign f's direction must share.
+    lambert: Option<(Spectrum, f32)>,
     /// The origin of a shadow ray leaving the surface on the side of its geometric normal (index 0) and on
     /// the other (index 1), as `spawn_ray_to` would offset it.
     origins: [Vec3A; 2],
@@ -126,17 +127,23 @@ impl Receiver {
     /// The receiver at `si` with BSDF `bsdf`, seen from `wo`.
     pub fn new(si: SurfaceInteraction, bsdf: Bsdf, wo: Vec3A) -> Self {
         let origins = [si.ng, -si.ng].map(|w| offset_ray_origin(si.p, si.p_error, si.ng, w));
-        Receiver { si, bsdf, wo, lambert: lambertian(&bsdf), origins }
+        let lambert = lambertian(&bsdf).map(|r| {
+            let r = if bsdf.to_local(wo).z != 0.0 { r } else { Spectrum::ZERO };
+            (r, wo.dot(bsdf.geometric_normal()))
+        });
+        Receiver { si, bsdf, wo, lambert, origins }
     }
 
     /// f(ω_o, `wi`) over the non-specular lobes (specular ones are 0 for any given direction).
     #[inline]
     fn f(&self, wi: Vec3A) -> Spectrum {
         match self.lambert {
-            Some(r) => {
-                let ng = self.bsdf.geometric_normal();
-                let (a, b) = (self.wo.dot(ng), wi.dot(ng));
-                if a * b > 0.0 && self.bsdf.to_local(self.wo).z != 0.0 { r } else { Spectrum::ZERO }
+            Some((r, a)) => {
+                if a * wi.dot(self.bsdf.geometric_normal()) > 0.0 {
+                    r
+                } else {
+                    Spectrum::ZERO
+                }
             }
             None => self.bsdf.f(self.wo, wi, BxdfFlags::ALL),
         }
