@@ -108,6 +108,98 @@ struct Node {
     skip: u32,
 }
 
+/// A uniform grid over the positional VPLs: cell (x, y, z) holds `members[start[c]..start[c + 1]]` with
+/// c = x + dims.x·(y + dims.y·z), each cell's members in ascending order. Cells are at least twice the ball's
+/// radius wide, so a ball meets at most two cells along each axis (three with the rounding margin).
+#[derive(Clone, Debug, Default)]
+struct Grid {
+    origin: Vec3A,
+    /// 1 / the cell width.
+    inv_cell: f32,
+    dims: [u32; 3],
+    start: Vec<u32>,
+    members: Vec<u32>,
+}
+
+/// Most members a grid query gathers on the stack before it falls back to the tree walk.
+const GRID_GATHER: usize = 64;
+
+impl Grid {
+    /// The grid over VPLs `0..positional` for balls of radius `near` (> 0), with at most about
+    /// 8 cells per VPL (wider cells where the scene is large against `near`).
+    fn new(vpls: &Vpls, positional: usize, near: f32) -> Grid {
+        let points = &vpls.list[..positional];
+        if points.is_empty() {
+            return Grid::default();
+        }
+        let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
+        for v in points {
+            (lo, hi) = (lo.min(v.p), hi.max(v.p));
+        }
+        let extent = (hi - lo).max(Vec3A::ZERO);
+        let max_cells = (8 * positional).max(4096) as f32;
+        let mut cell = 2.0 * near;
+        let count = |cell: f32| (extent / cell).floor() + Vec3A::ONE;
+        while {
+            let n = count(cell);
+            !(n.x * n.y * n.z <= max_cells)
+        } {
+            cell *= 1.5;
+        }
+        let n = count(cell);
+        let dims = [n.x as u32, n.y as u32, n.z as u32];
+        let mut grid = Grid { origin: lo, inv_cell: 1.0 / cell, dims, start: Vec::new(), members: Vec::new() };
+        let cells = dims.iter().map(|&d| d as usize).product::<usize>();
+        let of: Vec<u32> = points.iter().map(|v| grid.cell_of(v.p)).collect();
+        let mut start = vec![0u32; cells + 1];
+        for &c in &of {
+            start[c as usize + 1] += 1;
+        }
+        for c in 0..cells {
+            start[c + 1] += start[c];
+        }
+        let mut fill = start.clone();
+        let mut members = vec![0u32; positional];
+        for (j, &c) in of.iter().enumerate() {
+            members[fill[c as usize] as usize] = j as u32;
+            fill[c as usize] += 1;
+        }
+        (grid.start, grid.members) = (start, members);
+        grid
+    }
+
+    /// The cell index along each axis of `p`, clamped to the grid.
+    #[inline]
+    fn coords(&self, p: Vec3A) -> [u32; 3] {
+        let q = (p - self.origin) * self.inv_cell;
+        // `as u32` saturates: below the grid (and NaN) gives 0.
+        [0, 1, 2].map(|k| (q[k] as u32).min(self.dims[k] - 1))
+    }
+
+    #[inline]
+    fn cell_of(&self, p: Vec3A) -> u32 {
+        let [x, y, z] = self.coords(p);
+        x + self.dims[0] * (y + self.dims[1] * z)
+    }
+
+    /// Calls `f` with every VPL of every cell the axis-aligned box around `apex` of half-width `r` meets
+    /// (a superset of the ball's members).
+    #[inline]
+    fn candidates(&self, apex: Vec3A, r: f32, mut f: impl FnMut(u32)) {
+        if self.start.is_empty() {
+            return;
+        }
+        let (lo, hi) = (self.coords(apex - Vec3A::splat(r)), self.coords(apex + Vec3A::splat(r)));
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                let row = self.dims[0] * (y + self.dims[1] * z);
+                let (a, b) = (self.start[(row + lo[0]) as usize], self.start[(row + hi[0]) as usize + 1]);
+                self.members[a as usize..b as usize].iter().for_each(|&j| f(j));
+            }
+        }
+    }
+}
+
 /// The split's data for a VPL set: a tree for ball and cone queries over the positional VPLs and the
 /// beams of the VPLs with a sharp lobe.
 #[derive(Clone, Debug, Default)]
@@ -119,6 +211,9 @@ pub struct Split {
     /// Positional VPLs are `0..positional`, directional ones after them.
     positional: usize,
     nodes: Vec<Node>,
+    /// The positional VPLs bucketed by a uniform grid of cells at least 2·`near` wide, for the ball query
+    /// alone (the common case: a shading point without a sharp lobe).
+    grid: Grid,
     /// Per VPL, its index in `beams` (u32::MAX: none).
     beam_of: Vec<u32>,
     /// The VPLs with a sharp lobe: index, position, beam.
@@ -145,6 +240,9 @@ impl Split {
         let positional = vpls.list.iter().take_while(|v| !matches!(v.emitter, Emitter::Directional)).count();
         let mut split = Split { max_angle, near, positional, beam_of: vec![u32::MAX; vpls.len()], ..Split::default() };
         split.build(vpls, 0, positional);
+        if near > 0.0 {
+            split.grid = Grid::new(vpls, positional, near);
+        }
         if max_angle == 0.0 {
             return split;
         }
@@ -246,8 +344,45 @@ impl Local<'_> {
         beam.contains((self.apex - *p).normalize_or_zero())
     }
 
-    /// Calls `f` with every member of S(s), each once.
+    /// Calls `f` with every member of S(s), each once, positional VPLs in ascending order (the order
+    /// [`Local::estimate`]'s reservoir sees them in).
     pub fn for_each(&self, vpls: &Vpls, mut f: impl FnMut(usize)) {
+        let sp = self.split;
+        if self.cone.is_none() && sp.near > 0.0 && self.ball_from_grid(vpls, &mut f) {
+            return self.for_each_beam(vpls, f);
+        }
+        self.for_each_tree(vpls, f);
+    }
+
+    /// The ball's members from the grid, sorted, when there are at most [`GRID_GATHER`] (`false`, having
+    /// called nothing, when there are more).
+    #[inline]
+    fn ball_from_grid(&self, vpls: &Vpls, f: &mut impl FnMut(usize)) -> bool {
+        let (mut found, mut n) = ([0u32; GRID_GATHER], 0usize);
+        let mut overflow = false;
+        // The box is widened a little so that rounding in the cell coordinates never drops a member.
+        let r = self.split.near * (1.0 + 1e-4) + 1e-6 * self.apex.abs().max_element().max(1.0);
+        self.split.grid.candidates(self.apex, r, |j| {
+            if self.in_ball(vpls, j as usize) {
+                if n < GRID_GATHER {
+                    found[n] = j;
+                    n += 1;
+                } else {
+                    overflow = true;
+                }
+            }
+        });
+        if overflow {
+            return false;
+        }
+        let found = &mut found[..n];
+        found.sort_unstable();
+        found.iter().for_each(|&j| f(j as usize));
+        true
+    }
+
+    /// Every member of S(s) by walking the tree (balls and cones), then the beams.
+    fn for_each_tree(&self, vpls: &Vpls, mut f: impl FnMut(usize)) {
         let sp = self.split;
         if self.cone.is_some() || sp.near > 0.0 {
             let mut i = 0;
@@ -276,7 +411,12 @@ impl Local<'_> {
                 }
             }
         }
-        for (b, &(j, _, _)) in sp.beams.iter().enumerate() {
+        self.for_each_beam(vpls, f);
+    }
+
+    /// The members of S(s) that neither the ball nor the cone holds: those whose beam holds the apex.
+    fn for_each_beam(&self, vpls: &Vpls, mut f: impl FnMut(usize)) {
+        for (b, &(j, _, _)) in self.split.beams.iter().enumerate() {
             let j = j as usize;
             if self.in_beam(b) && !self.in_ball(vpls, j) && !self.cone.is_some_and(|c| self.in_cone(vpls, &c, j)) {
                 f(j);
@@ -410,8 +550,9 @@ mod tests {
     fn the_tree_query_finds_exactly_the_members_once() {
         let mut rng = Rng::new(17);
         let v = vpls(&mut rng);
-        // Cones alone, a ball alone, and both.
-        for (angle, near) in [(0.5, 0.0), (0.0, 0.3), (0.5, 0.3)] {
+        // Cones alone, a ball alone (one that the grid answers, and one too full for its gather, ~130
+        // members, that falls back to the tree), and both.
+        for (angle, near) in [(0.5, 0.0), (0.0, 0.3), (0.0, 1.0), (0.5, 0.3)] {
             let split = Split::new(&v, angle, near);
             assert_eq!(split.beam_count(), if angle > 0.0 { 300 } else { 0 }, "every sharp VPL has a beam");
             let (mut members, mut in_ball) = (0, 0);
@@ -423,6 +564,10 @@ mod tests {
                 let local = Local { split: &split, apex, cone };
                 let mut found = Vec::new();
                 local.for_each(&v, |j| found.push(j));
+                // The grid gives the tree's members in the tree's order (the reservoir's draws depend on it).
+                let mut walked = Vec::new();
+                local.for_each_tree(&v, |j| walked.push(j));
+                assert_eq!(found, walked, "apex {apex:?} cone {cone:?}");
                 let mut unique = found.clone();
                 unique.sort_unstable();
                 unique.dedup();
