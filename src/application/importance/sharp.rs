@@ -140,10 +140,11 @@ impl Grid {
         let max_cells = (8 * positional).max(4096) as f32;
         let mut cell = 2.0 * near;
         let count = |cell: f32| (extent / cell).floor() + Vec3A::ONE;
-        while {
+        loop {
             let n = count(cell);
-            !(n.x * n.y * n.z <= max_cells)
-        } {
+            if n.x * n.y * n.z <= max_cells {
+                break;
+            }
             cell *= 1.5;
         }
         let n = count(cell);
