@@ -566,6 +566,41 @@ mod tests {
         }
     }
 
+    #[test]
+    fn shadow_rays_from_the_precomputed_ends_are_spawn_ray_to_s() {
+        let loaded = load_str(ROOM, Path::new("room.pbrt"), LoadOptions::default()).unwrap();
+        let scene = &loaded.scene;
+        let sh = Shading::build(scene, true, &mut Warnings::default()).unwrap();
+        let select = LightSelect::new(&sh.lights, "power").unwrap();
+        let v = Vpls::generate(scene, &sh, &select, 1000, 5, 0.05, &mut Rng::new(7));
+        assert_eq!(v.ends.len(), v.len());
+        let mut rng = Rng::new(8);
+        for k in 0..40 {
+            // Receivers on the floor and on the wall; VPLs on both sides of each (the point light's have no
+            // normal).
+            let [a, b] = rng.uniform2();
+            let ray = if k % 2 == 0 {
+                Ray::new(Vec3A::new(3.8 * a - 1.9, 1.0, 3.8 * b - 1.9), -Vec3A::Y)
+            } else {
+                Ray::new(Vec3A::new(3.8 * a - 1.9, 2.9 * b + 0.05, 0.0), Vec3A::Z)
+            };
+            let si = scene.geometry.intersect(&ray).unwrap();
+            let x = Receiver::new(si, sh.bsdf(&si).unwrap(), crate::sampling::warp::uniform_sphere(rng.uniform2()));
+            for (j, vpl) in v.list.iter().enumerate() {
+                if let Emitter::Directional = vpl.emitter {
+                    continue;
+                }
+                let (fast, plain) = (
+                    v.shadow_ray(j, &x),
+                    spawn_ray_to(&x.si, &SurfacePoint { p: vpl.p, p_error: vpl.p_error, n: vpl.ng }),
+                );
+                let bits = |r: &Ray| [r.o.to_array(), r.d.to_array()].map(|v| v.map(f32::to_bits));
+                assert_eq!(bits(&fast), bits(&plain), "receiver {k}, VPL {j}");
+                assert_eq!(fast.t_max, plain.t_max);
+            }
+        }
+    }
+
     fn dummy_interaction() -> SurfaceInteraction {
         let loaded = load_str(ROOM, Path::new("room.pbrt"), LoadOptions::default()).unwrap();
         loaded.scene.geometry.intersect(&Ray::new(Vec3A::new(0.1, 1.0, 0.2), -Vec3A::Y)).unwrap()
