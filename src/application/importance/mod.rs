@@ -165,7 +165,7 @@ impl ImportanceCache {
         let n = cx.vpls.len();
         let k = self.baseline_draws().max(1);
         let split = cx.split.at(x);
-        let mut l = split.estimate(cx.scene, &cx.shading, &cx.vpls, x, rng, rays);
+        let mut l = split.estimate(cx.scene, &cx.shading, &cx.vpls, x, k, rng, rays);
         for _ in 0..k {
             let (j, p) = match self.sampling {
                 Sampling::Uniform if n > 0 => (rng.below(n as u32) as usize, 1.0 / n as f64),
@@ -485,7 +485,7 @@ impl Application for ImportanceCache {
         if let Some(x) = cx.receiver(s) {
             let mix = Mixture::new(near.iter().map(|c| &c.record.dists), self.enabled, cx.vpls.len());
             let split = cx.split.at(&x);
-            l += split.estimate(cx.scene, &cx.shading, &cx.vpls, &x, rng, rays);
+            l += split.estimate(cx.scene, &cx.shading, &cx.vpls, &x, self.baseline_draws(), rng, rays);
             for t in 0..4 {
                 let Some(j) = mix.sample(t, rng) else { continue };
                 let factor = mix.factor(t, j, self.mis);

@@ -21,9 +21,13 @@
 //! What: for a shading point s, the set S(s) holds every positional VPL within `near` (= `splitnear`·d_c)
 //! of s, every VPL whose direction from s lies in the cone of s's sharp lobes ([`sharp_cone`]), and every
 //! VPL with a sharp lobe whose beam cone contains s. The VPL sum splits exactly: Σ_j I_j(s) = Σ_{j∈S(s)}
-//! I_j(s) + Σ_{j∉S(s)} I_j(s). The first part is estimated at s itself with one shadow ray — one member
-//! drawn in proportion to its exact unoccluded contribution there, so only its visibility is left to
-//! chance; the second is the usual estimator with every draw that lands in S(s) counted as 0. S(s) depends
+//! I_j(s) + Σ_{j∉S(s)} I_j(s). The first part is estimated at s itself with as many shadow rays as the
+//! estimator draws VPLs (4 for importance caching, `draws` for the baselines): exactly when S(s) has no
+//! more members with light, else by that many members drawn systematically in proportion to their exact
+//! unoccluded contribution there, so only their visibility is left to chance; the second is the usual
+//! estimator with every draw that lands in S(s) counted as 0. (With one draw, as before, the split's
+//! variance was 36 % of the 640×360 bathroom's squared error at 2800 caches, seed 0; with four, 10 %, for
+//! 15 % more shadow rays.) S(s) depends
 //! on s alone, never on a draw, so both parts stay unbiased for their sums and the whole for the same VPL
 //! image (`placement none` is unchanged). A lobe counts as sharp where its microfacet density exceeds
 //! [`D_MIN`] within a cone narrower than the `splitcone` angle; wider lobes are left to the estimator
@@ -46,6 +50,9 @@ use crate::shading::{Spectrum, luminance};
 /// Microfacet density (sr⁻¹) above which a lobe's directions are split off. CHOICE: 1 — below it a glossy
 /// lobe's value is of the order of a diffuse one's (1/π), which the cached distributions handle.
 pub const D_MIN: f32 = 1.0;
+
+/// Members with light whose values [`Local::estimate`] keeps from its first walk over the set.
+const KEPT: usize = 16;
 
 /// VPLs per leaf of the query tree.
 const LEAF: usize = 8;
@@ -346,7 +353,7 @@ impl Local<'_> {
     }
 
     /// Calls `f` with every member of S(s), each once, positional VPLs in ascending order (the order
-    /// [`Local::estimate`]'s reservoir sees them in).
+    /// [`Local::estimate`]'s systematic draws see them in).
     pub fn for_each(&self, vpls: &Vpls, mut f: impl FnMut(usize)) {
         let sp = self.split;
         if self.cone.is_none() && sp.near > 0.0 && self.ball_from_grid(vpls, &mut f) {
@@ -438,34 +445,80 @@ impl Local<'_> {
         to_center <= cone.angle + spread + 1e-3
     }
 
-    /// An estimate of Σ_{j∈S(s)} I_j(s) at receiver `x`: one member drawn in proportion to the luminance
-    /// of its unoccluded contribution (weighted reservoir sampling, one uniform per member), its
-    /// visibility decided by one shadow ray.
+    /// The split's part of the VPL sum at `x`, Σ_{j∈S(s)} I_j(x), estimated with at most `draws` shadow
+    /// rays: exact (one ray per member) when S(s) has no more members with light than that, else `draws`
+    /// members drawn by systematic sampling in proportion to their exact unoccluded contribution, so only
+    /// their visibility is left to chance (a member drawn m times gets one ray and weight m/draws). The
+    /// members' values are kept from the walk that sums them; a set too large for [`KEPT`] is walked again.
+    #[allow(clippy::too_many_arguments)]
     pub fn estimate(
         &self,
         scene: &Scene,
         sh: &Shading<'_>,
         vpls: &Vpls,
         x: &Receiver,
+        draws: u32,
         rng: &mut Rng,
         rays: &mut RayCounters,
     ) -> Spectrum {
-        let mut total = 0.0f32;
-        let mut pick: Option<(usize, Spectrum, f32)> = None;
-        self.for_each(vpls, |j| {
-            let Some(u) = vpls.unoccluded_value(sh, j, x) else { return };
+        let weight = |j: usize| {
+            let u = vpls.unoccluded_value(sh, j, x)?;
             let w = luminance(u);
-            if w <= 0.0 || !w.is_finite() {
-                return;
-            }
-            total += w;
-            if rng.uniform() * total < w {
-                pick = Some((j, u, w));
+            (w > 0.0 && w.is_finite()).then_some((u, w))
+        };
+        let mut kept = [(0u32, Spectrum::ZERO, 0.0f32); KEPT];
+        let (mut total, mut count) = (0.0f32, 0usize);
+        self.for_each(vpls, |j| {
+            if let Some((u, w)) = weight(j) {
+                if let Some(k) = kept.get_mut(count) {
+                    *k = (j as u32, u, w);
+                }
+                total += w;
+                count += 1;
             }
         });
-        let Some((j, u, w)) = pick else { return Spectrum::ZERO };
-        rays.shadow += 1;
-        if scene.geometry.occluded(&vpls.shadow_ray(j, x)) { Spectrum::ZERO } else { u * (total / w) }
+        if count == 0 {
+            return Spectrum::ZERO;
+        }
+        let mut visible = |j: usize| {
+            rays.shadow += 1;
+            !scene.geometry.occluded(&vpls.shadow_ray(j, x))
+        };
+        let draws = draws.max(1);
+        // Systematic sampling: targets (i + ξ)·total/draws, i = 0..draws, each in the member whose interval of
+        // the running sum holds it (the running sum repeats `total`'s additions, so the last member with light
+        // ends at `total` exactly; a target rounded past it goes to that member).
+        let step = total / draws as f32;
+        let mut next = if count <= draws as usize { 0.0 } else { rng.uniform() * step };
+        let (mut acc, mut left, mut sum) = (0.0f32, draws, Spectrum::ZERO);
+        let mut member = |j: usize, u: Spectrum, w: f32| {
+            if count <= draws as usize {
+                if visible(j) {
+                    sum += u;
+                }
+                return;
+            }
+            acc += w;
+            let mut hits = 0u32;
+            while left > 0 && (next < acc || acc >= total) {
+                hits += 1;
+                left -= 1;
+                next += step;
+            }
+            if hits > 0 && visible(j) {
+                sum += u * (hits as f32 * step / w);
+            }
+        };
+        if count <= KEPT {
+            kept[..count].iter().for_each(|&(j, u, w)| member(j as usize, u, w));
+        } else {
+            self.for_each(vpls, |j| {
+                if let Some((u, w)) = weight(j) {
+                    member(j, u, w);
+                }
+            });
+        }
+        sum
     }
 }
 
@@ -565,7 +618,7 @@ mod tests {
                 let local = Local { split: &split, apex, cone };
                 let mut found = Vec::new();
                 local.for_each(&v, |j| found.push(j));
-                // The grid gives the tree's members in the tree's order (the reservoir's draws depend on it).
+                // The grid gives the tree's members in the tree's order (the systematic draws depend on it).
                 let mut walked = Vec::new();
                 local.for_each_tree(&v, |j| walked.push(j));
                 assert_eq!(found, walked, "apex {apex:?} cone {cone:?}");
@@ -591,5 +644,87 @@ mod tests {
         let off = Split::new(&v, 0.0, 0.0);
         let local = Local { split: &off, apex: Vec3A::ZERO, cone: None };
         assert!((0..v.len()).all(|j| !local.holds(&v, j)));
+    }
+}
+
+#[cfg(test)]
+mod estimate_tests {
+    use std::path::Path;
+
+    use super::*;
+    use crate::error::Warnings;
+    use crate::scene::ray::Ray;
+    use crate::scene::{LoadOptions, load_str};
+    use crate::shading::light::LightSelect;
+
+    /// A floor, a wall standing on it lit from one side by a lamp, and a low post in front of the wall: a
+    /// floor point near the wall has dozens of the wall's VPLs within a small ball, and the post hides some.
+    const WALLED: &str = "LookAt -3 2 0 0 0 0 0 1 0\nCamera \"perspective\"\nWorldBegin\n\
+        Material \"matte\" \"rgb Kd\" [0.7 0.6 0.5]\n\
+        Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-2 0 -2  2 0 -2  2 0 2  -2 0 2]\n\
+        Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [0 0 -2  0 0 2  0 1.5 2  0 1.5 -2]\n\
+        Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-0.15 0 -0.1  -0.15 0 0.1  -0.15 0.3 0.1  -0.15 0.3 -0.1]\n\
+        AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [5 5 5]\n\
+        Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-1.5 2.5 -0.5  -0.5 2.5 -0.5  -0.5 2.5 0.5  -1.5 2.5 0.5]\n\
+        AttributeEnd\nWorldEnd\n";
+
+    #[test]
+    fn the_split_sum_is_exact_up_to_its_draws_and_unbiased_beyond() {
+        let loaded = load_str(WALLED, Path::new("walled.pbrt"), LoadOptions::default()).unwrap();
+        let scene = &loaded.scene;
+        let sh = Shading::build(scene, true, &mut Warnings::default()).unwrap();
+        let select = LightSelect::new(&sh.lights, "power").unwrap();
+        let v = Vpls::generate(scene, &sh, &select, 2000, 5, 0.05, &mut Rng::new(3));
+        let split = Split::new(&v, 0.0, 0.6);
+        let mut rng = Rng::new(4);
+        let (mut systematic, mut occluded_some) = (0, 0);
+        for k in 0..12 {
+            let at = Vec3A::new(-0.3, 1.0, 0.08 * k as f32 - 0.44);
+            let si = scene.geometry.intersect(&Ray::new(at, -Vec3A::Y)).unwrap();
+            let x = Receiver::new(si, sh.bsdf(&si).unwrap(), Vec3A::new(0.2, 1.0, -0.4).normalize());
+            let local = split.at(&x);
+            let mut rays = RayCounters::default();
+            let (mut exact, mut unoccluded, mut lit) = (Spectrum::ZERO, Spectrum::ZERO, 0u32);
+            local.for_each(&v, |j| {
+                if let Some(u) = v.unoccluded_value(&sh, j, &x) {
+                    lit += 1;
+                    unoccluded += u;
+                    exact += v.contribution(scene, &sh, j, &x, &mut rays);
+                }
+            });
+            occluded_some += (luminance(exact) < 0.999 * luminance(unoccluded)) as u32;
+            // Up to `draws` members with light: every one is traced, the sum is exact, no draw is made.
+            let mut rays = RayCounters::default();
+            let before = rng.clone();
+            let whole = local.estimate(scene, &sh, &v, &x, lit.max(1), &mut rng, &mut rays);
+            assert_eq!(whole, exact, "receiver {k}: {lit} members");
+            assert_eq!(rays.shadow, lit as u64);
+            assert_eq!(rng.uniform(), before.clone().uniform(), "no random number is used");
+            if lit <= 4 {
+                continue;
+            }
+            // Beyond: at most `draws` rays, and the mean of many estimates is the exact sum.
+            systematic += 1;
+            for draws in [1u32, 4] {
+                let n = 4000;
+                let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+                for _ in 0..n {
+                    let mut rays = RayCounters::default();
+                    let e = luminance(local.estimate(scene, &sh, &v, &x, draws, &mut rng, &mut rays)) as f64;
+                    assert!(rays.shadow <= draws as u64);
+                    sum += e;
+                    sum2 += e * e;
+                }
+                let mean = sum / n as f64;
+                let se = ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
+                let want = luminance(exact) as f64;
+                assert!(
+                    (mean - want).abs() <= 4.0 * se + 1e-6 * want,
+                    "receiver {k}, {draws} draws over {lit} members: mean {mean} vs {want} (se {se})"
+                );
+            }
+        }
+        assert!(systematic >= 6, "most receivers should have more members than draws ({systematic})");
+        assert!(occluded_some >= 3, "the wall should hide members from some receivers ({occluded_some})");
     }
 }
