@@ -381,6 +381,12 @@ fn stats_report_the_records_and_geometry_free_dgs() {
     assert!(kept > 3000.0 && kept < 4000.0, "{kept}");
     assert_eq!(c.settings["vpls"], 1000);
     assert_eq!(c.settings["distributions"], "fubc");
+    // What the scene gave beside what was asked: every VPL here, from fewer light paths (a path leaves
+    // several); making them is a stage of its own, inside the total.
+    assert_eq!(c.stats.prepared["vpls_generated"], 1000);
+    let paths = c.stats.prepared["light_paths"].as_u64().unwrap();
+    assert!(paths > 0 && paths < 1000, "{paths}");
+    assert!(c.stats.times.prepare > 0.0 && c.stats.times.prepare < c.stats.times.total);
     // vgc+dgs leaves out the geometry term for importance caching: it places exactly as the diff-only
     // ablation, and not as the geometry-only one.
     let placed = |p: &str| {
@@ -436,6 +442,7 @@ fn failure_cases_give_finite_images() {
                 WorldBegin\nMaterial \"matte\"\nShape \"sphere\"\nWorldEnd\n";
     let out = render_with(&loaded_text(dark), &[("vpls", "50"), ("caches", "4")], 1, None).unwrap();
     assert!(out.image.pixels.iter().flatten().all(|&v| v == 0.0));
+    assert_eq!(out.cache.unwrap().stats.prepared["vpls_generated"], 0, "the stats say no VPL was made");
     let lamp = "LookAt 0 0 -3 0 0 0 0 1 0\nCamera \"perspective\"\nFilm \"image\" \"integer xresolution\" 8 \"integer yresolution\" 8\n\
                 WorldBegin\nAreaLightSource \"diffuse\" \"rgb L\" [2 2 2]\nShape \"sphere\"\nWorldEnd\n";
     let out = render_with(&loaded_text(lamp), &[("vpls", "50"), ("caches", "4")], 1, None).unwrap();

@@ -516,6 +516,9 @@ fn stats_report_the_dropped_per_direction_data_and_the_per_pixel_term_time() {
             s.record_bytes_kept
         );
         assert!(s.record_bytes_kept > 0, "{o}");
+        // The room's one light (a disk), and the time to prepare the lights and materials, inside the total.
+        assert_eq!(s.prepared["lights"], 1, "{o}");
+        assert!(s.times.prepare > 0.0 && s.times.prepare < s.times.total, "{o}");
         if o == "full" {
             assert!(s.times.per_pixel_term > 0.0, "{o}");
             assert!(s.notes.iter().any(|n| n.contains("directlighting")), "{o}: {:?}", s.notes);

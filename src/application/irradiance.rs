@@ -317,6 +317,11 @@ impl Application for IrradianceCache {
         ]
     }
 
+    /// The lights the gathering paths sample (each emitting triangle counts as one, as in pbrt-v3).
+    fn prepared_report(&self, cx: &Lit<'_>) -> Vec<(&'static str, serde_json::Value)> {
+        vec![("lights", cx.shading.lights.len().into())]
+    }
+
     /// `output full`: pbrt-v3's `directlighting` with its defaults.
     fn per_pixel_term(&self) -> Option<PerPixelTerm> {
         (self.output == Output::Full).then(|| PerPixelTerm { integrator: "directlighting", set: Vec::new() })

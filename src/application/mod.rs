@@ -134,6 +134,14 @@ pub trait Application: Sync + Sized {
     /// The resolved parameters (defaults filled in), for the `--stats` report.
     fn settings(&self) -> Vec<(&'static str, serde_json::Value)>;
 
+    /// What [`Application::prepare`] made of the scene, for the `--stats` report: what the settings asked
+    /// for may differ from what the scene gave (importance caching: the VPLs generated, which can be fewer
+    /// than `vpls`, and the light paths traced for them; irradiance caching: the lights).
+    fn prepared_report(&self, cx: &Self::Prepared<'_>) -> Vec<(&'static str, serde_json::Value)> {
+        let _ = cx;
+        Vec::new()
+    }
+
     /// The per-pixel integrators computing the same image (none, one, or several compared side by side);
     /// the first is the one an experiment renders converged.
     fn baselines(&self) -> Vec<Baseline> {

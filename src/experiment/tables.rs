@@ -280,7 +280,8 @@ fn swept(records: &[Record]) -> Vec<Table> {
 }
 
 /// The stages of a timing table: the `--stats` names and the column headings.
-const STAGES: [(&str, &str); 9] = [
+const STAGES: [(&str, &str); 10] = [
+    ("prepare", "prepare"),
     ("shading_points", "G-buffer"),
     ("initial_generation", "initial gen"),
     ("initial_computation", "initial comp"),

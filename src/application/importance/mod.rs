@@ -391,6 +391,16 @@ impl Application for ImportanceCache {
         ]
     }
 
+    /// The VPLs generated (fewer than `vpls` when the lights' paths carry nothing), the light paths traced
+    /// for them, and the VPLs whose sharp lobe sends a beam that the split draws apart.
+    fn prepared_report(&self, cx: &Lit<'_>) -> Vec<(&'static str, serde_json::Value)> {
+        vec![
+            ("vpls_generated", cx.vpls.len().into()),
+            ("light_paths", cx.vpls.paths.into()),
+            ("vpl_beams", cx.split.beam_count().into()),
+        ]
+    }
+
     /// Power sampling, then uniform sampling, with the same VPLs and sub-pixel samples; their sample count
     /// is `draws` (VPLs per sample), so their pixels integrate the same footprint as the reference's.
     fn baselines(&self) -> Vec<Baseline> {

@@ -57,15 +57,20 @@ pub fn render_with<A: Application>(
     }
     p.check_overrides(A::NAME)?;
     report_unused(integrator, A::NAME, &settings.set, warnings);
-    let cx = app.prepare(scene, warnings)?;
-    let mut term_warnings = Warnings::default();
+    let mut run_warnings = Warnings::default();
     let run = || -> Result<CachedOutput> {
+        let start = std::time::Instant::now();
+        let cx = app.prepare(scene, &mut run_warnings)?;
+        let prepare_secs = start.elapsed().as_secs_f64();
         let mut out = render_cached(scene, &app, &cx, &cs)?;
+        out.stats.times.prepare = prepare_secs;
+        out.stats.times.total += prepare_secs;
+        out.stats.prepared = app.prepared_report(&cx).into_iter().map(|(k, v)| (k.to_string(), v)).collect();
         if let Some(why) = &without_caches {
             out.stats.notes.push(format!("{why}: every sample is shaded without caches (placement none)"));
         }
         if let Some(term) = &term {
-            let w = &mut term_warnings;
+            let w = &mut run_warnings;
             let (image, rays, secs) = render_per_pixel_term(scene, term.integrator, &term.set, settings, w)?;
             out.image.add(&image);
             out.stats.render_rays.add(&rays);
@@ -79,8 +84,10 @@ pub fn render_with<A: Application>(
         }
         Ok(out)
     };
-    let out = with_threads(settings.threads, run)??;
-    warnings.extend(term_warnings);
+    let out = with_threads(settings.threads, run);
+    // Kept whether or not the render succeeded (a failing scene's warnings still say what was read).
+    warnings.extend(run_warnings);
+    let out = out??;
     let mut rays = out.stats.cache_rays;
     rays.add(&out.stats.render_rays);
     Ok(RenderOutput {

@@ -9,6 +9,9 @@ use crate::scene::ray::RayCounters;
 /// Wall seconds of each step (paper Table 4).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct StageTimes {
+    /// Preparing what the application reads from the scene (`Application::prepare`: lights, materials,
+    /// textures; importance caching's VPLs).
+    pub prepare: f64,
     /// Tracing the G-buffer (one shading point per pixel centre).
     pub shading_points: f64,
     /// First-stage placement.
@@ -34,8 +37,9 @@ pub struct StageTimes {
 impl StageTimes {
     /// The steps in pipeline order with their summary labels (total excluded): the one list behind the
     /// end-of-run summary and the experiment CSV's columns.
-    pub fn steps(&self) -> [(&'static str, f64); 9] {
+    pub fn steps(&self) -> [(&'static str, f64); 10] {
         [
+            ("prepare", self.prepare),
             ("shading points", self.shading_points),
             ("initial gen", self.initial_generation),
             ("initial comp", self.initial_computation),
@@ -79,6 +83,9 @@ pub struct CacheStats {
     pub record_bytes_kept: usize,
     /// Peak resident memory of the process (bytes), where the OS reports it.
     pub peak_memory_bytes: Option<u64>,
+    /// What the application prepared from the scene (`Application::prepared_report`: e.g. the VPLs
+    /// generated).
+    pub prepared: serde_json::Map<String, serde_json::Value>,
     /// Remarks (budget above the valid pixels, …).
     pub notes: Vec<String>,
 }
@@ -143,6 +150,10 @@ impl CacheStats {
         }
         if let Some(th) = self.placement.sd_threshold {
             s += &format!("\nSD: threshold {th:.5} after {} search iterations", self.placement.search_iterations);
+        }
+        if !self.prepared.is_empty() {
+            let items: Vec<String> = self.prepared.iter().map(|(k, v)| format!("{k} {v}")).collect();
+            s += &format!("\nprepared: {}", items.join(", "));
         }
         for n in self.notes.iter().chain(&self.placement.notes) {
             s += &format!("\nnote: {n}");
