@@ -648,13 +648,9 @@ mod tests {
 
 #[cfg(test)]
 mod estimate_tests {
-    use std::path::Path;
-
+    use super::super::vpl::with_lit_scene;
     use super::*;
-    use crate::error::Warnings;
     use crate::scene::ray::Ray;
-    use crate::scene::{LoadOptions, load_str};
-    use crate::shading::light::LightSelect;
 
     /// A floor, a wall standing on it lit from one side by a lamp, and a low post in front of the wall: a
     /// floor point near the wall has dozens of the wall's VPLs within a small ball, and the post hides some.
@@ -669,61 +665,59 @@ mod estimate_tests {
 
     #[test]
     fn the_split_sum_is_exact_up_to_its_draws_and_unbiased_beyond() {
-        let loaded = load_str(WALLED, Path::new("walled.pbrt"), LoadOptions::default()).unwrap();
-        let scene = &loaded.scene;
-        let sh = Shading::build(scene, true, &mut Warnings::default()).unwrap();
-        let select = LightSelect::new(&sh.lights, "power").unwrap();
-        let v = Vpls::generate(scene, &sh, &select, 2000, 5, 0.05, &mut Rng::new(3));
-        let split = Split::new(&v, 0.0, 0.6);
-        let mut rng = Rng::new(4);
-        let (mut systematic, mut occluded_some) = (0, 0);
-        for k in 0..12 {
-            let at = Vec3A::new(-0.3, 1.0, 0.08 * k as f32 - 0.44);
-            let si = scene.geometry.intersect(&Ray::new(at, -Vec3A::Y)).unwrap();
-            let x = Receiver::new(si, sh.bsdf(&si).unwrap(), Vec3A::new(0.2, 1.0, -0.4).normalize());
-            let local = split.at(&x);
-            let mut rays = RayCounters::default();
-            let (mut exact, mut unoccluded, mut lit) = (Spectrum::ZERO, Spectrum::ZERO, 0u32);
-            local.for_each(&v, |j| {
-                if let Some(u) = v.unoccluded_value(&sh, j, &x) {
-                    lit += 1;
-                    unoccluded += u;
-                    exact += v.contribution(scene, &sh, j, &x, &mut rays);
+        with_lit_scene(WALLED, |scene, sh, select| {
+            let v = Vpls::generate(scene, sh, select, 2000, 5, 0.05, &mut Rng::new(3));
+            let split = Split::new(&v, 0.0, 0.6);
+            let mut rng = Rng::new(4);
+            let (mut systematic, mut occluded_some) = (0, 0);
+            for k in 0..12 {
+                let at = Vec3A::new(-0.3, 1.0, 0.08 * k as f32 - 0.44);
+                let si = scene.geometry.intersect(&Ray::new(at, -Vec3A::Y)).unwrap();
+                let x = Receiver::new(si, sh.bsdf(&si).unwrap(), Vec3A::new(0.2, 1.0, -0.4).normalize());
+                let local = split.at(&x);
+                let mut rays = RayCounters::default();
+                let (mut exact, mut unoccluded, mut lit) = (Spectrum::ZERO, Spectrum::ZERO, 0u32);
+                local.for_each(&v, |j| {
+                    if let Some(u) = v.unoccluded_value(sh, j, &x) {
+                        lit += 1;
+                        unoccluded += u;
+                        exact += v.contribution(scene, sh, j, &x, &mut rays);
+                    }
+                });
+                occluded_some += (luminance(exact) < 0.999 * luminance(unoccluded)) as u32;
+                // Up to `draws` members with light: every one is traced, the sum is exact, no draw is made.
+                let mut rays = RayCounters::default();
+                let before = rng.clone();
+                let whole = local.estimate(scene, sh, &v, &x, lit.max(1), &mut rng, &mut rays);
+                assert_eq!(whole, exact, "receiver {k}: {lit} members");
+                assert_eq!(rays.shadow, lit as u64);
+                assert_eq!(rng.uniform(), before.clone().uniform(), "no random number is used");
+                if lit <= 4 {
+                    continue;
                 }
-            });
-            occluded_some += (luminance(exact) < 0.999 * luminance(unoccluded)) as u32;
-            // Up to `draws` members with light: every one is traced, the sum is exact, no draw is made.
-            let mut rays = RayCounters::default();
-            let before = rng.clone();
-            let whole = local.estimate(scene, &sh, &v, &x, lit.max(1), &mut rng, &mut rays);
-            assert_eq!(whole, exact, "receiver {k}: {lit} members");
-            assert_eq!(rays.shadow, lit as u64);
-            assert_eq!(rng.uniform(), before.clone().uniform(), "no random number is used");
-            if lit <= 4 {
-                continue;
-            }
-            // Beyond: at most `draws` rays, and the mean of many estimates is the exact sum.
-            systematic += 1;
-            for draws in [1u32, 4] {
-                let n = 4000;
-                let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-                for _ in 0..n {
-                    let mut rays = RayCounters::default();
-                    let e = luminance(local.estimate(scene, &sh, &v, &x, draws, &mut rng, &mut rays)) as f64;
-                    assert!(rays.shadow <= draws as u64);
-                    sum += e;
-                    sum2 += e * e;
+                // Beyond: at most `draws` rays, and the mean of many estimates is the exact sum.
+                systematic += 1;
+                for draws in [1u32, 4] {
+                    let n = 4000;
+                    let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+                    for _ in 0..n {
+                        let mut rays = RayCounters::default();
+                        let e = luminance(local.estimate(scene, sh, &v, &x, draws, &mut rng, &mut rays)) as f64;
+                        assert!(rays.shadow <= draws as u64);
+                        sum += e;
+                        sum2 += e * e;
+                    }
+                    let mean = sum / n as f64;
+                    let se = ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
+                    let want = luminance(exact) as f64;
+                    assert!(
+                        (mean - want).abs() <= 4.0 * se + 1e-6 * want,
+                        "receiver {k}, {draws} draws over {lit} members: mean {mean} vs {want} (se {se})"
+                    );
                 }
-                let mean = sum / n as f64;
-                let se = ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
-                let want = luminance(exact) as f64;
-                assert!(
-                    (mean - want).abs() <= 4.0 * se + 1e-6 * want,
-                    "receiver {k}, {draws} draws over {lit} members: mean {mean} vs {want} (se {se})"
-                );
             }
-        }
-        assert!(systematic >= 6, "most receivers should have more members than draws ({systematic})");
-        assert!(occluded_some >= 3, "the wall should hide members from some receivers ({occluded_some})");
+            assert!(systematic >= 6, "most receivers should have more members than draws ({systematic})");
+            assert!(occluded_some >= 3, "the wall should hide members from some receivers ({occluded_some})");
+        });
     }
 }

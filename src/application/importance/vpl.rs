@@ -531,12 +531,22 @@ impl Vpls {
     }
 }
 
+/// Test set-up of the importance-caching unit tests: the scene of pbrt text `text`, its shading and the
+/// flux-proportional light selection that VPL generation reads, handed to `f` (they borrow the loaded scene).
+#[cfg(test)]
+pub(crate) fn with_lit_scene<T>(text: &str, f: impl FnOnce(&Scene, &Shading<'_>, &LightSelect) -> T) -> T {
+    let options = crate::scene::LoadOptions::default();
+    let loaded = crate::scene::load_str(text, std::path::Path::new("test.pbrt"), options).unwrap();
+    let sh = Shading::build(&loaded.scene, true, &mut crate::error::Warnings::default()).unwrap();
+    let select = LightSelect::new(&sh.lights, "power").unwrap();
+    f(&loaded.scene, &sh, &select)
+}
+
 #[cfg(test)]
 mod tests {
     use std::path::Path;
 
     use super::*;
-    use crate::error::Warnings;
     use crate::scene::{LoadOptions, load_str};
 
     /// A floor, a wall facing it and a lamp: VPLs on all three.
@@ -568,37 +578,35 @@ mod tests {
 
     #[test]
     fn shadow_rays_from_the_precomputed_ends_are_spawn_ray_to_s() {
-        let loaded = load_str(ROOM, Path::new("room.pbrt"), LoadOptions::default()).unwrap();
-        let scene = &loaded.scene;
-        let sh = Shading::build(scene, true, &mut Warnings::default()).unwrap();
-        let select = LightSelect::new(&sh.lights, "power").unwrap();
-        let v = Vpls::generate(scene, &sh, &select, 1000, 5, 0.05, &mut Rng::new(7));
-        assert_eq!(v.ends.len(), v.len());
-        let mut rng = Rng::new(8);
-        for k in 0..40 {
-            // Receivers on the floor and on the wall; VPLs on both sides of each (the point light's have no
-            // normal).
-            let [a, b] = rng.uniform2();
-            let ray = if k % 2 == 0 {
-                Ray::new(Vec3A::new(3.8 * a - 1.9, 1.0, 3.8 * b - 1.9), -Vec3A::Y)
-            } else {
-                Ray::new(Vec3A::new(3.8 * a - 1.9, 2.9 * b + 0.05, 0.0), Vec3A::Z)
-            };
-            let si = scene.geometry.intersect(&ray).unwrap();
-            let x = Receiver::new(si, sh.bsdf(&si).unwrap(), crate::sampling::warp::uniform_sphere(rng.uniform2()));
-            for (j, vpl) in v.list.iter().enumerate() {
-                if let Emitter::Directional = vpl.emitter {
-                    continue;
+        with_lit_scene(ROOM, |scene, sh, select| {
+            let v = Vpls::generate(scene, sh, select, 1000, 5, 0.05, &mut Rng::new(7));
+            assert_eq!(v.ends.len(), v.len());
+            let mut rng = Rng::new(8);
+            for k in 0..40 {
+                // Receivers on the floor and on the wall; VPLs on both sides of each (the point light's have no
+                // normal).
+                let [a, b] = rng.uniform2();
+                let ray = if k % 2 == 0 {
+                    Ray::new(Vec3A::new(3.8 * a - 1.9, 1.0, 3.8 * b - 1.9), -Vec3A::Y)
+                } else {
+                    Ray::new(Vec3A::new(3.8 * a - 1.9, 2.9 * b + 0.05, 0.0), Vec3A::Z)
+                };
+                let si = scene.geometry.intersect(&ray).unwrap();
+                let x = Receiver::new(si, sh.bsdf(&si).unwrap(), crate::sampling::warp::uniform_sphere(rng.uniform2()));
+                for (j, vpl) in v.list.iter().enumerate() {
+                    if let Emitter::Directional = vpl.emitter {
+                        continue;
+                    }
+                    let (fast, plain) = (
+                        v.shadow_ray(j, &x),
+                        spawn_ray_to(&x.si, &SurfacePoint { p: vpl.p, p_error: vpl.p_error, n: vpl.ng }),
+                    );
+                    let bits = |r: &Ray| [r.o.to_array(), r.d.to_array()].map(|v| v.map(f32::to_bits));
+                    assert_eq!(bits(&fast), bits(&plain), "receiver {k}, VPL {j}");
+                    assert_eq!(fast.t_max, plain.t_max);
                 }
-                let (fast, plain) = (
-                    v.shadow_ray(j, &x),
-                    spawn_ray_to(&x.si, &SurfacePoint { p: vpl.p, p_error: vpl.p_error, n: vpl.ng }),
-                );
-                let bits = |r: &Ray| [r.o.to_array(), r.d.to_array()].map(|v| v.map(f32::to_bits));
-                assert_eq!(bits(&fast), bits(&plain), "receiver {k}, VPL {j}");
-                assert_eq!(fast.t_max, plain.t_max);
             }
-        }
+        });
     }
 
     fn dummy_interaction() -> SurfaceInteraction {
@@ -608,36 +616,38 @@ mod tests {
 
     #[test]
     fn the_bound_holds_over_the_region_and_generation_is_deterministic() {
-        let loaded = load_str(ROOM, Path::new("room.pbrt"), LoadOptions::default()).unwrap();
-        let scene = &loaded.scene;
-        let sh = Shading::build(scene, true, &mut Warnings::default()).unwrap();
-        let select = LightSelect::new(&sh.lights, "power").unwrap();
-        let make = |seed| Vpls::generate(scene, &sh, &select, 500, 5, 0.05, &mut Rng::new(seed));
-        let v = make(3);
-        assert_eq!(v.len(), 500);
-        assert_eq!(v.list, make(3).list, "same seed, same VPLs");
-        assert_ne!(v.list, make(4).list);
-        assert!(v.list.iter().any(|p| matches!(p.emitter, Emitter::Isotropic)));
-        assert!(v.list.iter().any(|p| matches!(p.emitter, Emitter::Cosine { .. }) && p.p.y < 2.4));
-        // Receivers on the floor: a centre x and points within `radius` of it. For Lambertian receivers and
-        // cosine or isotropic VPLs the bound at x is an upper bound of the unoccluded contribution there.
-        let floor = |px: f32, pz: f32| {
-            let si = scene.geometry.intersect(&Ray::new(Vec3A::new(px, 1.0, pz), -Vec3A::Y)).unwrap();
-            Receiver::new(si, sh.bsdf(&si).unwrap(), Vec3A::new(0.0, 1.0, -1.0).normalize())
-        };
-        let mut rng = Rng::new(9);
-        for (cx, cz, radius) in [(0.013, 0.021, 0.3), (-1.0, 1.2, 0.6), (1.5, -1.37, 0.1)] {
-            let x = floor(cx, cz);
-            for _ in 0..20 {
-                let [a, b] = rng.uniform2();
-                let (r, phi) = (radius * a.sqrt(), std::f32::consts::TAU * b);
-                let y = floor(cx + r * phi.cos(), cz + r * phi.sin());
-                for j in 0..v.len() {
-                    let at_y = v.unoccluded(&sh, j, &y).map_or(0.0, |u| luminance(u.value));
-                    let bound = v.bound(&sh, j, &x, radius);
-                    assert!(at_y <= bound * (1.0 + 1e-4) + 1e-9, "VPL {j} ({:?}): {at_y} > {bound}", v.list[j].emitter);
+        with_lit_scene(ROOM, |scene, sh, select| {
+            let make = |seed| Vpls::generate(scene, sh, select, 500, 5, 0.05, &mut Rng::new(seed));
+            let v = make(3);
+            assert_eq!(v.len(), 500);
+            assert_eq!(v.list, make(3).list, "same seed, same VPLs");
+            assert_ne!(v.list, make(4).list);
+            assert!(v.list.iter().any(|p| matches!(p.emitter, Emitter::Isotropic)));
+            assert!(v.list.iter().any(|p| matches!(p.emitter, Emitter::Cosine { .. }) && p.p.y < 2.4));
+            // Receivers on the floor: a centre x and points within `radius` of it. For Lambertian receivers and
+            // cosine or isotropic VPLs the bound at x is an upper bound of the unoccluded contribution there.
+            let floor = |px: f32, pz: f32| {
+                let si = scene.geometry.intersect(&Ray::new(Vec3A::new(px, 1.0, pz), -Vec3A::Y)).unwrap();
+                Receiver::new(si, sh.bsdf(&si).unwrap(), Vec3A::new(0.0, 1.0, -1.0).normalize())
+            };
+            let mut rng = Rng::new(9);
+            for (cx, cz, radius) in [(0.013, 0.021, 0.3), (-1.0, 1.2, 0.6), (1.5, -1.37, 0.1)] {
+                let x = floor(cx, cz);
+                for _ in 0..20 {
+                    let [a, b] = rng.uniform2();
+                    let (r, phi) = (radius * a.sqrt(), std::f32::consts::TAU * b);
+                    let y = floor(cx + r * phi.cos(), cz + r * phi.sin());
+                    for j in 0..v.len() {
+                        let at_y = v.unoccluded(sh, j, &y).map_or(0.0, |u| luminance(u.value));
+                        let bound = v.bound(sh, j, &x, radius);
+                        assert!(
+                            at_y <= bound * (1.0 + 1e-4) + 1e-9,
+                            "VPL {j} ({:?}): {at_y} > {bound}",
+                            v.list[j].emitter
+                        );
+                    }
                 }
             }
-        }
+        });
     }
 }
