@@ -28,10 +28,10 @@
 //! estimator with every draw that lands in S(s) counted as 0. (With one draw, as before, the split's
 //! variance was 36 % of the 640×360 bathroom's squared error at 2800 caches, seed 0; with four, 10 %, for
 //! 15 % more shadow rays.) S(s) depends on s alone, never on a draw, so both parts stay unbiased for their
-//! sums and the whole for the same VPL image (`placement none` is unchanged). A lobe counts as sharp where its microfacet density exceeds
-//! [`D_MIN`] within a cone narrower than the `splitcone` angle; wider lobes are left to the estimator
-//! (their cones would hold hundreds of VPLs). The ball holds a handful of VPLs (the VPLs lie on surfaces,
-//! and d_c is 2.5 % of the scene's diagonal).
+//! sums and the whole for the same VPL image (`placement none` is unchanged). A lobe counts as sharp where
+//! its microfacet density exceeds [`D_MIN`] within a cone narrower than the `splitcone` angle; wider lobes
+//! are left to the estimator (their cones would hold hundreds of VPLs). The ball holds a handful of VPLs
+//! (the VPLs lie on surfaces, and d_c is 2.5 % of the scene's diagonal).
 //!
 //! Depends on the VPLs and the shading layer's lobes; never on placement or the caches.
 
