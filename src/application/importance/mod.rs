@@ -17,7 +17,7 @@
 //! `"string sampling"` `uniform` or `power` renders the standard many-light estimators instead (the same
 //! number of VPL draws per sample, chosen uniformly or in proportion to each VPL's flux), with no caches.
 //!
-//! DGS compares two caches by Σ_j |F_a[j] − F_b[j]| and, as the paper found best for importance caching,
+//! DGS compares two caches by `Σ_j |F_a[j] − F_b[j]|` and, as the paper found best for importance caching,
 //! without the geometry term ([`Application::DGS_GEOMETRY`]; `vgc+dgs:geom` still has it).
 
 pub mod distribution;
