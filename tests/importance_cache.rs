@@ -272,6 +272,35 @@ fn every_placement_and_both_heuristics_are_unbiased_with_occlusion_on_the_shippe
 }
 
 #[test]
+fn shadow_rays_shared_in_runs_keep_the_estimate_unbiased_and_trace_fewer_rays() {
+    // A cache traces only the ends of a run of VPLs close together as it sees them (`visangle`); at 45° the
+    // runs are long and straddle the room's occluders, so some VPLs are taken as visible where they are
+    // not. F is then a different density, but the one sampled: the estimate stays unbiased.
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/room.pbrt");
+    let loaded = load(&path, LoadOptions { resolution: Some([24, 18]), ..Default::default() }).unwrap();
+    let base = [("vpls", "256"), ("caches", "16"), ("subpixels", "4"), ("placement", "vgc+dgs")];
+    let r = reference(&loaded, &base);
+    let rays = |angle: &str| {
+        let mut set = base.to_vec();
+        set.push(("visangle", angle));
+        let out = render_with(&loaded, &set, 1, None).unwrap();
+        let c = out.cache.unwrap();
+        assert_eq!(c.settings["visangle"], angle.parse::<f64>().unwrap());
+        (c.stats.cache_rays.shadow, out.image.pixels)
+    };
+    let (exact, exact_image) = rays("0");
+    let (default, _) = rays("10");
+    let (wide, wide_image) = rays("45");
+    eprintln!("shadow rays: 45° {wide}, 10° {default}, 0° {exact}");
+    assert!(wide < default && default < exact, "shadow rays: 45° {wide}, 10° {default}, 0° {exact}");
+    assert_ne!(wide_image, exact_image, "the shared rays should change F, and so the draws");
+    let mut set = base.to_vec();
+    set.push(("visangle", "45"));
+    let z = worst_z(&loaded, &set, &r);
+    assert!(z <= 3.0, "visangle 45: a quadrant is {z:.2} standard errors from the reference");
+}
+
+#[test]
 fn the_conservative_technique_keeps_vpls_occluded_at_the_caches_reachable() {
     // Few caches over a floor partly in shadow, each sample served by its nearest cache alone (M = 1): a
     // shadowed cache gives the light's VPLs zero F density, yet it serves lit points at the shadow's edge.
@@ -422,6 +451,9 @@ fn bad_parameters_and_absurd_budgets_are_clear_errors() {
         ("splitcone", "-1", "between 0 and 90"),
         ("splitnear", "1000", "between 0 and 100"),
         ("splitnear", "-0.5", "between 0 and 100"),
+        ("visangle", "60", "between 0 and 45"),
+        ("visangle", "-1", "between 0 and 45"),
+        ("visangle", "nan", "between 0 and 45"),
     ] {
         let e = render_with(&loaded, &[(k, v)], 1, None).unwrap_err().to_string();
         assert!(e.contains(k) && e.contains(want), "{k}={v}: {e}");

@@ -2,11 +2,12 @@
 //! §6.3), registered as `importancecache`.
 //!
 //! The scene's light is represented by `vpls` virtual point lights ([`vpl`]). A cache stores, per VPL,
-//! the luminance of its contribution at the cache with visibility (F) and without (U) — one shadow ray per
-//! VPL that could contribute — and, once placement is over and the region the cache serves is known, an
-//! upper bound over that region (B); each is kept as a quantised distribution over the VPLs
-//! ([`distribution`], about one byte per VPL). A sub-pixel sample draws one VPL from each technique F, U,
-//! B and C (uniform over all VPLs), each the mixture of its selected caches' distributions, and combines
+//! the luminance of its contribution at the cache with visibility (F) and without (U) — VPLs close together
+//! as the cache sees them share their shadow rays there ([`visibility`], parameter `visangle`; 0: one ray
+//! per VPL that could contribute, as in the paper) — and, once placement is over and the region the cache
+//! serves is known, an upper bound over that region (B); each is kept as a quantised distribution over the
+//! VPLs ([`distribution`], about one byte per VPL). A sub-pixel sample draws one VPL from each technique F,
+//! U, B and C (uniform over all VPLs), each the mixture of its selected caches' distributions, and combines
 //! them by multiple importance sampling ([`mixture`]): the balance heuristic by default, α-max as an
 //! option. Every draw costs one shadow ray. Directly seen emitters add their radiance. The few VPLs a
 //! near-specular lobe singles out at a shading point, and those closer to it than d_c, are drawn apart
@@ -23,6 +24,7 @@
 pub mod distribution;
 pub mod mixture;
 pub mod sharp;
+pub mod visibility;
 pub mod vpl;
 
 use crate::error::{Error, Result, Warnings};
@@ -93,6 +95,9 @@ pub struct ImportanceCache {
     /// Radius of the ball around the shading point whose VPLs are summed apart, in units of d_c (0: no
     /// ball; [`sharp`]).
     pub split_near: f32,
+    /// Widest angle, degrees, of a run of VPLs whose shadow rays a cache's record shares (0: one ray per
+    /// VPL; [`visibility`]).
+    pub vis_angle: f32,
 }
 
 /// One importance cache: where it is (B is built from it once its region is known) and its F, U and B
@@ -243,6 +248,13 @@ impl Application for ImportanceCache {
             "VPLs closer to the shading point than this many clamp distances d_c are drawn apart there too \
              (every sampling; 0: off)",
         ),
+        Parameter::new(
+            "visangle",
+            "float",
+            "10",
+            "degrees: a cache traces only the two ends of a run of VPLs this close together as it sees them, \
+             and takes the run as visible when both are (else traces every member; 0: one ray per VPL)",
+        ),
     ];
     const DGS_GEOMETRY: bool = false;
     const PAPER_CACHES: usize = 25_000;
@@ -324,7 +336,12 @@ impl Application for ImportanceCache {
         if !(0.0..=100.0).contains(&split_near) {
             return Err(bad("splitnear", format!("must be between 0 and 100 clamp distances, got {split_near}")));
         }
+        let vis_angle = p.float_or("visangle", 10.0)?;
+        if !(0.0..=45.0).contains(&vis_angle) {
+            return Err(bad("visangle", format!("must be between 0 and 45 degrees, got {vis_angle}")));
+        }
         Ok(ImportanceCache {
+            vis_angle: vis_angle as f32,
             split_cone: split_cone as f32,
             split_near: split_near as f32,
             draws: draws as u32,
@@ -388,6 +405,10 @@ impl Application for ImportanceCache {
                 "splitnear",
                 serde_json::Number::from_f64(self.split_near as f64).map_or(serde_json::Value::Null, Into::into),
             ),
+            (
+                "visangle",
+                serde_json::Number::from_f64(self.vis_angle as f64).map_or(serde_json::Value::Null, Into::into),
+            ),
         ]
     }
 
@@ -449,19 +470,26 @@ impl Application for ImportanceCache {
         // draws it), and the shadow rays go to the VPLs that matter. (With every value 0 there is nothing
         // to trace: F and U are both empty.)
         let max = distribution::finite_max(&unoccluded);
-        let floor = Quantised::smallest_kept(max);
-        let mut full = vec![0.0f32; n];
-        let mut hint = OccluderHint::default();
-        if max > 0.0 {
-            for (j, (&u, f)) in unoccluded.iter().zip(full.iter_mut()).enumerate() {
-                if u >= floor {
+        let full = if max > 0.0 {
+            let mut hint = OccluderHint::default();
+            let position = |j: usize| {
+                let v = &cx.vpls.list[j];
+                (!matches!(v.emitter, vpl::Emitter::Directional)).then_some(v.p)
+            };
+            visibility::full_values(
+                x.si.p,
+                position,
+                &unoccluded,
+                Quantised::smallest_kept(max),
+                self.vis_angle.to_radians(),
+                |j| {
                     rays.shadow += 1;
-                    if !cx.scene.geometry.occluded_hinted(&cx.vpls.shadow_ray(j, &x), None, &mut hint) {
-                        *f = u;
-                    }
-                }
-            }
-        }
+                    !cx.scene.geometry.occluded_hinted(&cx.vpls.shadow_ray(j, &x), None, &mut hint)
+                },
+            )
+        } else {
+            vec![0.0f32; n]
+        };
         ImportanceRecord { at: *at, dists: [Quantised::new(&full), Quantised::new(&unoccluded), None] }
     }
 
@@ -550,6 +578,7 @@ mod tests {
             draws: 0,
             split_cone: 10.0,
             split_near: 1.0,
+            vis_angle: 10.0,
         };
         let total = 25_000 * app.record_bytes_bound();
         assert!(total <= 1_000_000_000, "{total}");
