@@ -95,23 +95,34 @@ mod tests {
         ((0..count).map(|i| Vec3A::new(i as f32 * spacing, 10.0, 0.0)).collect(), vec![1.0; count])
     }
 
+    /// The full values seen from the origin with floor 0.5 (VPL `j` at `p[j]`, none where `p[j]` is not
+    /// finite), and how often each VPL was traced.
+    fn shared(p: &[Vec3A], u: &[f32], angle: f32, visible: impl Fn(usize) -> bool) -> (Vec<f32>, Vec<u32>) {
+        let mut traced = vec![0; u.len()];
+        let full = full_values(
+            Vec3A::ZERO,
+            |j| p[j].is_finite().then_some(p[j]),
+            u,
+            0.5,
+            angle,
+            |j| {
+                traced[j] += 1;
+                visible(j)
+            },
+        );
+        (full, traced)
+    }
+
+    /// `count` visibility answers, each occluded with probability `rate`.
+    fn random_occlusion(count: usize, rate: f32, rng: &mut Rng) -> Vec<bool> {
+        (0..count).map(|_| rng.uniform() < rate).collect()
+    }
+
     #[test]
     fn angle_zero_traces_every_candidate_once_and_is_exact() {
         let (p, u) = line(50, 0.01);
-        let mut rng = Rng::keyed(3, 0, 0);
-        let occluded: Vec<bool> = (0..50).map(|_| rng.uniform() < 0.3).collect();
-        let mut traced = [0; 50];
-        let full = full_values(
-            Vec3A::ZERO,
-            |j| Some(p[j]),
-            &u,
-            0.5,
-            0.0,
-            |j| {
-                traced[j] += 1;
-                !occluded[j]
-            },
-        );
+        let occluded = random_occlusion(50, 0.3, &mut Rng::keyed(3, 0, 0));
+        let (full, traced) = shared(&p, &u, 0.0, |j| !occluded[j]);
         assert!(traced.iter().all(|&t| t == 1));
         for j in 0..50 {
             assert_eq!(full[j], if occluded[j] { 0.0 } else { 1.0 });
@@ -122,18 +133,8 @@ mod tests {
     fn values_below_the_floor_get_no_ray_and_no_value() {
         let (p, mut u) = line(10, 0.01);
         u[3] = 0.1;
-        let full = full_values(
-            Vec3A::ZERO,
-            |j| Some(p[j]),
-            &u,
-            0.5,
-            0.2,
-            |j| {
-                assert_ne!(j, 3, "a VPL below the floor was traced");
-                true
-            },
-        );
-        assert_eq!(full[3], 0.0);
+        let (full, traced) = shared(&p, &u, 0.2, |_| true);
+        assert_eq!((full[3], traced[3]), (0.0, 0));
         assert!(full.iter().enumerate().all(|(j, &f)| j == 3 || f == 1.0));
     }
 
@@ -141,26 +142,15 @@ mod tests {
     fn a_visible_run_costs_two_rays_and_never_loses_a_visible_vpl() {
         // All 40 within 0.2 rad of the first (spacing 0.01 at distance 10: 0.39 wide in all).
         let (p, u) = line(40, 0.01);
-        let mut rays = 0;
-        let full = full_values(
-            Vec3A::ZERO,
-            |j| Some(p[j]),
-            &u,
-            0.5,
-            0.2,
-            |_| {
-                rays += 1;
-                true
-            },
-        );
-        assert_eq!(rays, 2);
+        let (full, traced) = shared(&p, &u, 0.2, |_| true);
+        assert_eq!(traced.iter().sum::<u32>(), 2);
         assert!(full.iter().all(|&f| f == 1.0));
         // Random occlusion: F is never below the exact F, and every value is 0 or the unoccluded one.
         for seed in 0..20 {
             let mut rng = Rng::keyed(seed, 1, 0);
             let rate = rng.uniform();
-            let occluded: Vec<bool> = (0..40).map(|_| rng.uniform() < rate).collect();
-            let full = full_values(Vec3A::ZERO, |j| Some(p[j]), &u, 0.5, 0.2, |j| !occluded[j]);
+            let occluded = random_occlusion(40, rate, &mut rng);
+            let (full, _) = shared(&p, &u, 0.2, |j| !occluded[j]);
             for j in 0..40 {
                 assert!(full[j] == 0.0 || full[j] == u[j]);
                 if !occluded[j] {
@@ -172,45 +162,25 @@ mod tests {
 
     #[test]
     fn an_occluded_end_makes_the_run_exact_and_runs_stop_at_the_angle() {
-        let (p, u) = line(6, 0.01);
         let occluded = [false, true, false, false, false, true];
-        let full = full_values(Vec3A::ZERO, |j| Some(p[j]), &u, 0.5, 0.2, |j| !occluded[j]);
+        let (p, u) = line(6, 0.01);
+        let (full, traced) = shared(&p, &u, 0.2, |j| !occluded[j]);
         assert_eq!(full, vec![1.0, 0.0, 1.0, 1.0, 1.0, 0.0]);
+        assert!(traced.iter().all(|&t| t == 1));
         // 1 apart at distance 10: 0.1 rad, outside a 0.05 rad run, so each VPL is its own run.
         let (p, u) = line(6, 1.0);
-        let mut rays = 0;
-        let full = full_values(
-            Vec3A::ZERO,
-            |j| Some(p[j]),
-            &u,
-            0.5,
-            0.05,
-            |j| {
-                rays += 1;
-                !occluded[j]
-            },
-        );
-        assert_eq!(rays, 6);
+        let (full, traced) = shared(&p, &u, 0.05, |j| !occluded[j]);
+        assert!(traced.iter().all(|&t| t == 1));
         assert_eq!(full, vec![1.0, 0.0, 1.0, 1.0, 1.0, 0.0]);
     }
 
     #[test]
     fn vpls_without_a_position_are_traced_alone() {
-        let (p, u) = line(5, 0.01);
-        let mut rays = 0;
-        let full = full_values(
-            Vec3A::ZERO,
-            |j| (j != 2).then(|| p[j]),
-            &u,
-            0.5,
-            0.2,
-            |_| {
-                rays += 1;
-                true
-            },
-        );
+        let (mut p, u) = line(5, 0.01);
+        p[2] = Vec3A::NAN;
         // Runs {0, 1}, {2}, {3, 4}: every one traced.
-        assert_eq!(rays, 5);
+        let (full, traced) = shared(&p, &u, 0.2, |_| true);
+        assert!(traced.iter().all(|&t| t == 1));
         assert!(full.iter().all(|&f| f == 1.0));
     }
 }
