@@ -16,7 +16,7 @@
 //!
 //! Measured (2026-11-26, 640×360, 2800 caches, vgc+dgs, seeds 0–2, against the exact VPL sum; times are the
 //! whole render's, 2 threads, the two settings alternating): `angle` 10° against 0° took the Cornell box 22 %
-//! less time (its shadow rays 18.2 M → 8.0 M) for 0.3 % more RMSE, sibenik 17 % less for 0.7 % more RMSE and
+//! less time (all its rays 18.2 M → 8.0 M) for 0.3 % more RMSE, sibenik 17 % less for 0.7 % more RMSE and
 //! 1.2 % more HDR-FLIP, the bathroom 5 % less for 1.5 % more HDR-FLIP (its RMSE, decided by a few fireflies,
 //! fell). Sharing an occluded first VPL's answer too, or tracing one end only, saved a few % more time
 //! but cost the bathroom 3–6 % HDR-FLIP: at 0.1 rad, 15 % of the VPLs that a run's first VPL would speak
