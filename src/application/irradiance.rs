@@ -18,7 +18,7 @@
 //! its Σ cos θ_k. The record keeps E and, until placement is over, the luminance of
 //! every L_k, which is what two caches are compared by (Σ_k |ΔY|, §4.5.2). A sample is shaded as
 //! ρ_hd(ω_o)·E/π with E blended from its caches (ALGORITHMS.md §5, less the caches lying in front of the
-//! sample: Ward's test, see [`in_front`]; a choice of ours, `rejectinfront false` leaves it out), ρ_hd over
+//! sample: Ward's test, see `in_front`; a choice of ours, `rejectinfront false` leaves it out), ρ_hd over
 //! the BSDF's non-specular reflection lobes (exact for Lambertian lobes, 64 fixed stratified samples
 //! otherwise); purely specular and transmitting lobes
 //! get nothing from the caches. `output full` adds pbrt-v3's `directlighting` image (emission and direct
@@ -85,7 +85,7 @@ pub struct IrradianceCache {
     pub max_depth: u32,
     /// What the image holds.
     pub output: Output,
-    /// Whether a sample leaves out the caches that lie in front of it (see [`in_front`]).
+    /// Whether a sample leaves out the caches that lie in front of it (see `in_front`).
     pub reject_in_front: bool,
     rho_u: Vec<[f32; 2]>,
 }

@@ -170,7 +170,7 @@ pub trait Application: Sync + Sized {
         rays: &mut RayCounters,
     ) -> Self::Record;
 
-    /// Σ_k |g_a[k] − g_b[k]| over corresponding gathering samples (ALGORITHMS.md §4.5.2).
+    /// `Σ_k |g_a[k] − g_b[k]|` over corresponding gathering samples (ALGORITHMS.md §4.5.2).
     fn diff(&self, a: &Self::Record, b: &Self::Record) -> f32;
 
     /// Called once per record when placement is over and before any shading: keeps what shading needs and

@@ -41,7 +41,7 @@ const FONTS: [&str; 5] = [
     "/usr/share/fonts/truetype/freefont/FreeSans.ttf",
 ];
 
-/// Registers the charts' font once: the file named by `$CACHERT_FONT`, else the first of [`FONTS`] that
+/// Registers the charts' font once: the file named by `$CACHERT_FONT`, else the first of `FONTS` that
 /// loads. Charts (their labels are text) need it; the error says how to get one.
 pub fn font() -> Result<()> {
     static FONT: OnceLock<std::result::Result<(), String>> = OnceLock::new();

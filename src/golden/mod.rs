@@ -5,7 +5,7 @@
 //! |---|---|
 //! | [`manifest`] | `MANIFEST.json`: one [`Entry`] per golden — the render's inputs ([`Spec`]) and what was recorded |
 //! | [`matrix`] | the project's own matrix, enumerated from the placement and application registries |
-//! | [`check`] | rendering an entry, comparing it with its golden ([`Verdict`]), `check` and `update` |
+//! | [`check`](mod@check) | rendering an entry, comparing it with its golden ([`Verdict`]), `check` and `update` |
 //!
 //! A golden reproduces bit for bit with the same settings and seed on the same machine kind (rendering is
 //! deterministic whatever the thread count); on another machine kind it passes within a relative RMSE of

@@ -3,7 +3,7 @@
 //! The tokenizer (`lexer`) is written with nom; the directive parser (`parser`) builds typed parameter
 //! lists. `Include` is followed here (relative to the including file, cycles are an error) so later stages
 //! see one list. Nothing in this module knows about rendering; it must not depend on `scene` or anything
-//! after it. No input can make it panic: every problem is an [`Error`](crate::Error) with a location.
+//! after it. No input can make it panic: every problem is an [`Error`] with a location.
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod directive;

@@ -68,7 +68,7 @@ impl AmbientOcclusion {
     /// AO at a surface point seen along `wo_dir` (the incoming ray direction), with `u` one 2-D sample per
     /// direction. Returns Σ cos θ / (pdf · n).
     ///
-    /// Directions are made a batch of [`BATCH`] at a time in straight-line code the compiler vectorises, and
+    /// Directions are made a batch of `BATCH` at a time in straight-line code the compiler vectorises, and
     /// the two possible spawn origins (pbrt-v3's `OffsetRayOrigin` depends on the direction only through the
     /// side of the surface it leaves from) are computed once per point instead of once per ray.
     pub fn occlusion(

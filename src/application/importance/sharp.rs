@@ -448,7 +448,7 @@ impl Local<'_> {
     /// rays: exact (one ray per member) when S(s) has no more members with light than that, else `draws`
     /// members drawn by systematic sampling in proportion to their exact unoccluded contribution, so only
     /// their visibility is left to chance (a member drawn m times gets one ray and weight m/draws). The
-    /// members' values are kept from the walk that sums them; a set too large for [`KEPT`] is walked again.
+    /// members' values are kept from the walk that sums them; a set too large for `KEPT` is walked again.
     #[allow(clippy::too_many_arguments)]
     pub fn estimate(
         &self,

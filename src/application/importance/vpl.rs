@@ -1,12 +1,13 @@
 //! STAGE 5 (application, importance caching): the virtual point lights (ALGORITHMS.md §6.3) — made by
 //! tracing light paths (instant radiosity) and evaluated at a receiver.
 //!
-//! Every light path starts at a light chosen by power (pbrt-v3's `Sample_Le`, [`Lights::sample_le`]); its
-//! first vertex is an *emission VPL* (the direct light), every later surface vertex with a non-specular
-//! lobe a *surface VPL* (the indirect light). Paths continue by BSDF sampling up to `max_depth` surface
-//! vertices with Russian roulette after the second, and paths are traced until the requested number of
-//! VPLs exists (the last path is cut there); every power is divided by the number of paths started. The
-//! contribution of VPL j to a receiver x with BSDF f_x seen from ω_o is
+//! Every light path starts at a light chosen by power (pbrt-v3's `Sample_Le`,
+//! [`Lights::sample_le`](crate::shading::light::Lights::sample_le)); its first vertex is an *emission VPL*
+//! (the direct light), every later surface vertex with a non-specular lobe a *surface VPL* (the indirect
+//! light). Paths continue by BSDF sampling up to `max_depth` surface vertices with Russian roulette after
+//! the second, and paths are traced until the requested number of VPLs exists (the last path is cut
+//! there); every power is divided by the number of paths started. The contribution of VPL j to a
+//! receiver x with BSDF f_x seen from ω_o is
 //!
 //! I_j(x) = E_j(−ω) · f_x(ω_o, ω) · |cos θ_x| / max(d², d_c²) · V(x, y_j),
 //!
@@ -478,7 +479,7 @@ impl Vpls {
     }
 
     /// Luminance of an upper bound of VPL `j`'s unoccluded contribution anywhere within distance `radius`
-    /// of the receiver `x` (the B distribution, ALGORITHMS.md §6.3 after [BZ] `evalBoundedGeometricFactor`):
+    /// of the receiver `x` (the B distribution, ALGORITHMS.md §6.3 after \[BZ\] `evalBoundedGeometricFactor`):
     /// the distance shortened by `radius` (then clamped by d_c), the VPL's cosine widened by the angle the
     /// region subtends, the receiver's cosine bounded by 1, the BSDFs at the actual direction.
     pub fn bound(&self, sh: &Shading<'_>, j: usize, x: &Receiver, radius: f32) -> f32 {

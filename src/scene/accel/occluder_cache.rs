@@ -28,7 +28,7 @@ const WARM_UP: u32 = 64;
 /// While the cache is off, one query in this many still tries it (so it can come back on).
 const PROBE_EVERY: u32 = 32;
 
-/// The last [`WAYS`] blockers found for each of [`CELLS`] direction cells (an octahedral map of the sphere), and how
+/// The last `WAYS` blockers found for each of `CELLS` direction cells (an octahedral map of the sphere), and how
 /// often testing them has paid. Keep one per thread and reuse it from point to point: consecutive camera
 /// samples are close together, so a blocker met by one point's ray is a good first guess for the next
 /// point's ray in that direction. Where guesses mostly fail (open scenes, or blockers costly to test) the

@@ -45,7 +45,7 @@ impl MicrofacetReflection {
         same_hemisphere(wo, wi).then_some(Drawn { wi, wh })
     }
 
-    /// Density of [`MicrofacetReflection::sample_f`].
+    /// Density of `MicrofacetReflection`'s `sample_f`.
     #[inline]
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
         if !same_hemisphere(wo, wi) {
@@ -115,7 +115,7 @@ impl MicrofacetTransmission {
         Some(Drawn::new(refract(wo, wh, eta)?))
     }
 
-    /// Density of [`MicrofacetTransmission::sample_f`].
+    /// Density of `MicrofacetTransmission`'s `sample_f`.
     #[inline]
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
         if same_hemisphere(wo, wi) {

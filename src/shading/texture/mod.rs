@@ -1,6 +1,6 @@
 //! STAGE 5 (shading): textures evaluated at a surface interaction, as pbrt-v3's `src/textures` define them.
 //!
-//! [`Textures::build`] turns every `Texture` of the scene into a [`node::Node`] (reading image files once
+//! [`Textures::build`] turns every `Texture` of the scene into a `node::Node` (reading image files once
 //! per distinct file and settings); [`Textures::spectrum`] and [`Textures::float`] evaluate one at a hit.
 //! Supported: `constant`, `scale`, `mix`, `bilerp`, `checkerboard` (2-D, point-sampled, and 3-D), `dots`,
 //! `uv` and `imagemap` (PNG, TGA, EXR, PFM), with the `uv`, `spherical`, `cylindrical` and `planar`
@@ -8,7 +8,7 @@
 //! - image lookups are at the finest level of pbrt-v3's MIP map, with its EWA filter in the limit of a
 //!   small footprint (or bilinear with `"bool trilinear" true`) — pbrt-v3 does the same wherever a ray's
 //!   footprint is under a texel (see [`mipmap`]); minified textures are not prefiltered;
-//! - the checkerboard's `closedform` antialiasing is a point sample (see [`checkerboard`]).
+//! - the checkerboard's `closedform` antialiasing is a point sample (see `checkerboard`).
 //!
 //! `fbm`, `wrinkled`, `windy`, `marble` and `ptex` become the constant 1 with one warning each (the
 //! shared scenes use none of them). pbrt-v3's quirks kept on purpose: an unreadable image is a grey 0.5
