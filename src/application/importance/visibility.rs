@@ -1,6 +1,6 @@
-//! STAGE 4 (application internals): the visibility half of an importance cache's full distribution F —
-//! which of the VPLs that could light the cache it treats as visible, and so which shadow rays its record
-//! traces. It reads VPL positions and a visibility oracle; it knows nothing of placement, of the
+//! STAGE 5 (application, importance caching): the visibility half of an importance cache's full
+//! distribution F — which of the VPLs that could light the cache it treats as visible, and so which shadow
+//! rays its record traces. It reads VPL positions and a visibility oracle; it knows nothing of placement, of the
 //! distributions' storage or of how samples are drawn.
 //!
 //! Georgiev et al. (and ALGORITHMS.md §6.3) trace one shadow ray per VPL per cache; on the Cornell box those
