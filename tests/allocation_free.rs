@@ -14,7 +14,7 @@ use cachert::Warnings;
 use cachert::application::irradiance::{IrradianceCache, Output};
 use cachert::application::{Application, Neighbour};
 use cachert::gbuffer::shading_point;
-use cachert::sampling::Rng;
+use cachert::sampling::{Rng, Stratum};
 use cachert::scene::ray::RayCounters;
 use cachert::scene::{LoadOptions, load};
 
@@ -97,7 +97,8 @@ fn gathering_allocates_per_record_not_per_path_and_shading_allocates_nothing() {
             .zip(&points)
             .map(|(record, p)| Neighbour { record, p: p.p, n: p.n, weight: 1.0 })
             .collect();
-        let (shaded, value) = allocations(|| app.shade(&cx, &points[1], &near, &mut rng, &mut rays));
+        let (shaded, value) =
+            allocations(|| app.shade(&cx, &points[1], &near, &mut rng, Stratum::alone(0, 0), &mut rays));
         assert!(value.iter().all(|v| v.is_finite()), "{value:?}");
         assert_eq!(shaded, 0, "{n}×{n}: shading from the caches allocated");
     }

@@ -16,7 +16,7 @@ use cachert::placement::registry::NAMES;
 use cachert::render::cache_driver::{self, CacheOverrides, Placement, render_with};
 use cachert::render::params::{IntegratorParams, Parameter, markdown_table};
 use cachert::render::{RayCounters, RenderOutput, RenderSettings};
-use cachert::sampling::Rng;
+use cachert::sampling::{Rng, Stratum};
 use cachert::scene::{LoadOptions, Scene, load_str};
 
 /// A toy application: caches the shading normal's z (times `scale`) and remembers where it was computed,
@@ -66,6 +66,7 @@ impl Application for NormalZ {
         s: &ShadingPoint,
         near: &[Neighbour<'_, ZRecord>],
         _: &mut Rng,
+        _: Stratum,
         _: &mut RayCounters,
     ) -> [f32; 3] {
         let (mut sum, mut wsum) = (0.0f32, 0.0f32);
@@ -79,7 +80,7 @@ impl Application for NormalZ {
     }
 
     /// Channel 0: z; channel 1: |∂p/∂u · n| / |∂p/∂u| (0 for a tangent); channel 2: the emitter flag.
-    fn reference(&self, _: &(), s: &ShadingPoint, _: &mut Rng, _: &mut RayCounters) -> [f32; 3] {
+    fn reference(&self, _: &(), s: &ShadingPoint, _: &mut Rng, _: Stratum, _: &mut RayCounters) -> [f32; 3] {
         let along = s.dpdu.normalize_or_zero().dot(s.n).abs();
         [self.scale * s.n.z, along, s.area_light.is_some() as u8 as f32]
     }

@@ -93,9 +93,28 @@ fn quadrants(im: &Image) -> [f64; 4] {
     [0, 1, 2, 3].map(|q| sum[q] / n[q] as f64)
 }
 
-/// The largest |mean − reference| / standard error over the quadrants, for `SEEDS` renders with `set`.
+/// The largest |mean − reference| / standard error over the quadrants, for `SEEDS` renders with `set`
+/// (over `RETEST` more when that is beyond 3).
 fn worst_z(loaded: &LoadedScene, set: &[(&str, &str)], reference: &[f64; 4]) -> f64 {
-    let per_seed: Vec<[f64; 4]> = (0..SEEDS).map(|s| quadrants(&image(loaded, set, 100 + s))).collect();
+    let z = z_over(loaded, set, reference, 100, SEEDS);
+    if z <= 3.0 {
+        return z;
+    }
+    // This file checks 28 settings of 4 quadrants each: unbiased estimators land beyond 3 standard errors
+    // in one of them with a probability of about 1 − 0.9973^112 ≈ 26 % (it happened once: `u` alone on the
+    // open corner, 3.27 with seeds 100–163, 1.25 at most over 1024 seeds). A setting with a quadrant beyond
+    // 3 is checked again over RETEST fresh seeds, where a real bias shows twice as many standard errors and
+    // a chance excursion does not come back; the bar, 3 standard errors, stays.
+    eprintln!("  {set:?}: {z:.2} standard errors over {SEEDS} seeds; checked again over {RETEST} more");
+    z_over(loaded, set, reference, 10_000, RETEST)
+}
+
+/// Seeds of [`worst_z`]'s second look.
+const RETEST: u64 = 256;
+
+/// The largest |mean − reference| / standard error over the four quadrants, over `n` seeds from `first`.
+fn z_over(loaded: &LoadedScene, set: &[(&str, &str)], reference: &[f64; 4], first: u64, n: u64) -> f64 {
+    let per_seed: Vec<[f64; 4]> = (0..n).map(|s| quadrants(&image(loaded, set, first + s))).collect();
     let mut worst = 0.0f64;
     for q in 0..4 {
         let xs: Vec<f64> = per_seed.iter().map(|r| r[q]).collect();
@@ -225,8 +244,12 @@ fn the_near_split_is_unbiased_and_takes_out_the_near_vpls_spikes() {
     // Power sampling's weight is Σflux·f/d²: the near VPLs are its spikes, and the ball takes them out
     // (measured: the summed quadrant spread falls to 0.75 of its value without). The cached estimator's
     // spread here hardly moves (0.94): its caches, on the same two planes, already give those VPLs density;
-    // the bathroom's bevels, where they do not, are in results/importance/README.md.
-    let ratio = spread_ratio(&loaded, &base, ("sampling", "power"), ("splitnear", "3"), ("splitnear", "0"));
+    // the bathroom's bevels, where they do not, are in results/importance/README.md. Measured with
+    // independent draws: stratified ones already spread power sampling's draws of a pixel over those VPLs,
+    // and the split's share of the narrowing falls (0.88).
+    let mut independent = base.to_vec();
+    independent.push(("stratify", "false"));
+    let ratio = spread_ratio(&loaded, &independent, ("sampling", "power"), ("splitnear", "3"), ("splitnear", "0"));
     assert!(ratio < 0.85, "power: the near split should narrow the spread (ratio {ratio:.3})");
 }
 
@@ -243,6 +266,8 @@ fn cached_estimates_are_unbiased_for_every_technique_alone_and_combined_where_ea
         ("c", "balance"),
         ("fubc", "balance"),
         ("fubc", "alphamax"),
+        ("ffubcc", "balance"),
+        ("ffubcc", "alphamax"),
     ] {
         let mut set = base.to_vec();
         set.extend([("distributions", dist), ("mis", mis), ("placement", "vgc+dgs")]);
@@ -268,6 +293,52 @@ fn every_placement_and_both_heuristics_are_unbiased_with_occlusion_on_the_shippe
         set.push(("sampling", sampling));
         let z = worst_z(&loaded, &set, &r);
         assert!(z <= 3.0, "sampling {sampling}: a quadrant is {z:.2} standard errors from the reference");
+    }
+}
+
+#[test]
+fn draws_stratified_across_a_pixels_samples_stay_unbiased_and_narrow_the_spread() {
+    // `stratify` (on by default, so the tests above check it) spreads the draws of a pixel's four sub-pixel
+    // samples over the distributions; each draw alone is as before, so off is unbiased too, and on narrows
+    // the spread of the image over seeds — on the open corner, whose caches all see the same light; on the
+    // room at 96×72 the cached estimate's spread did not move (its 16 caches differ too much for the
+    // positions in their distributions to mean the same VPLs), which the 640×360 scenes of
+    // results/importance/README.md do not share.
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/room.pbrt");
+    let loaded = load(&path, LoadOptions { resolution: Some([24, 18]), ..Default::default() }).unwrap();
+    let base = [("vpls", "256"), ("caches", "16"), ("subpixels", "4")];
+    let r = reference(&loaded, &base);
+    assert_each_unbiased(
+        &loaded,
+        &base,
+        &[[("placement", "vgc+dgs"), ("stratify", "false")], [("sampling", "power"), ("stratify", "false")]],
+        &r,
+    );
+    let loaded = loaded_text(&open_corner(48));
+    // The pixels' own spread (root mean per-pixel variance over 16 seeds): the quadrants' would mix in
+    // the spread of where the caches go, which stratified draws do not touch.
+    let pixel_spread = |extra: (&str, &str), stratify: &str| {
+        let mut set = base.to_vec();
+        set.extend([extra, ("stratify", stratify)]);
+        let images: Vec<Image> = (0..16).map(|s| image(&loaded, &set, 500 + s)).collect();
+        let n = images.len() as f64;
+        let mut sum = 0.0;
+        for p in 0..images[0].pixels.len() {
+            for c in 0..3 {
+                let xs = images.iter().map(|im| im.pixels[p][c] as f64);
+                let mean = xs.clone().sum::<f64>() / n;
+                sum += xs.map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+            }
+        }
+        (sum / (3 * images[0].pixels.len()) as f64).sqrt()
+    };
+    for extra in [("placement", "vgc+dgs"), ("sampling", "uniform"), ("sampling", "power")] {
+        let (on, off) = (pixel_spread(extra, "true"), pixel_spread(extra, "false"));
+        eprintln!("  {extra:?}: pixel spread stratified {on:.3e}, independent {off:.3e}");
+        // Measured: 0.92 of the independent spread for importance caching, 0.98 for power sampling (whose
+        // draws concentrate on the lamp's few strong VPLs), 0.61 for uniform sampling.
+        let bound = if extra.1 == "uniform" { 0.8 } else { 1.0 };
+        assert!(on < bound * off, "{extra:?}: stratified draws should narrow the spread ({on:.3e} vs {off:.3e})");
     }
 }
 
@@ -442,7 +513,9 @@ fn bad_parameters_and_absurd_budgets_are_clear_errors() {
         ("vpls", "0", "between 1"),
         ("vpls", "1000000000000", "between 1"),
         ("distributions", "fx", "letters"),
-        ("distributions", "ff", "letters"),
+        ("distributions", "fffffffffffffffffu", "at most 16 times"),
+        ("distributions", "", "at least one"),
+        ("stratify", "maybe", "stratify"),
         ("mis", "max", "alphamax"),
         ("sampling", "all", "power"),
         ("clamp", "-1", "≥ 0"),

@@ -17,7 +17,7 @@ use crate::error::{Error, Result, Warnings};
 use crate::gbuffer::ShadingPoint;
 use crate::render::params::{IntegratorParams, Parameter, json_f32};
 use crate::sampling::warp::equal_area_hemisphere;
-use crate::sampling::{Frame, Rng};
+use crate::sampling::{Frame, Rng, Stratum};
 use crate::scene::Scene;
 use crate::scene::accel::OccluderHint;
 use crate::scene::ray::{Ray, RayCounters, offset_ray_origin};
@@ -162,6 +162,7 @@ impl Application for CacheAo {
         _: &ShadingPoint,
         near: &[Neighbour<'_, VisibilityRecord>],
         _: &mut Rng,
+        _: Stratum,
         _: &mut RayCounters,
     ) -> [f32; 3] {
         let (mut sum, mut wsum) = (0.0f32, 0.0f32);
@@ -172,7 +173,7 @@ impl Application for CacheAo {
         [if wsum > 0.0 { sum / wsum } else { 0.0 }; 3]
     }
 
-    fn reference(&self, scene: &&Scene, s: &ShadingPoint, _: &mut Rng, rays: &mut RayCounters) -> [f32; 3] {
+    fn reference(&self, scene: &&Scene, s: &ShadingPoint, _: &mut Rng, _: Stratum, rays: &mut RayCounters) -> [f32; 3] {
         [self.gather(scene, s, rays).ao; 3]
     }
 

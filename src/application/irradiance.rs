@@ -34,7 +34,7 @@ use crate::render::directlighting::MAX_DEPTH;
 use crate::render::lighting::{PassThrough, ShadePoint, Shading, estimate_direct};
 use crate::render::params::{IntegratorParams, Parameter};
 use crate::sampling::warp::equal_area_hemisphere;
-use crate::sampling::{Frame, Rng};
+use crate::sampling::{Frame, Rng, Stratum};
 use crate::scene::Scene;
 use crate::scene::ray::{Ray, RayCounters, offset_ray_origin};
 use crate::shading::bsdf::Bsdf;
@@ -354,6 +354,7 @@ impl Application for IrradianceCache {
         s: &ShadingPoint,
         near: &[Neighbour<'_, IrradianceRecord>],
         _: &mut Rng,
+        _: Stratum,
         _: &mut RayCounters,
     ) -> [f32; 3] {
         let blend = |all: bool| {
@@ -374,7 +375,7 @@ impl Application for IrradianceCache {
         (self.reflectance(cx, s) * e / wsum).to_array()
     }
 
-    fn reference(&self, cx: &Lit<'_>, s: &ShadingPoint, rng: &mut Rng, rays: &mut RayCounters) -> [f32; 3] {
+    fn reference(&self, cx: &Lit<'_>, s: &ShadingPoint, rng: &mut Rng, _: Stratum, rays: &mut RayCounters) -> [f32; 3] {
         let e = self.gather(cx, s, rng, rays, None);
         if e == Spectrum::ZERO {
             return [0.0; 3];

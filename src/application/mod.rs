@@ -26,7 +26,7 @@ use glam::Vec3A;
 use crate::error::{Result, Warnings};
 use crate::gbuffer::ShadingPoint;
 use crate::render::params::{IntegratorParams, Parameter};
-use crate::sampling::Rng;
+use crate::sampling::{Rng, Stratum};
 use crate::scene::Scene;
 use crate::scene::ray::RayCounters;
 
@@ -182,18 +182,30 @@ pub trait Application: Sync + Sized {
         let _ = (cx, record, region);
     }
 
-    /// Shades one sample from its selected caches (at least one; Σ weights > 0).
+    /// Shades one sample from its selected caches (at least one; Σ weights > 0). `stratum` says where the
+    /// sample sits among its pixel's sub-pixel samples, for draws stratified across them (an application
+    /// that draws nothing per sample ignores it; `rng` is the sample's own stream).
     fn shade(
         &self,
         cx: &Self::Prepared<'_>,
         s: &ShadingPoint,
         near: &[Neighbour<'_, Self::Record>],
         rng: &mut Rng,
+        stratum: Stratum,
         rays: &mut RayCounters,
     ) -> [f32; 3];
 
-    /// The brute-force answer at one sample: what the caches approximate (references, goldens).
-    fn reference(&self, cx: &Self::Prepared<'_>, s: &ShadingPoint, rng: &mut Rng, rays: &mut RayCounters) -> [f32; 3];
+    /// The brute-force answer at one sample: what the caches approximate (references, goldens); a
+    /// per-sample baseline's estimate when [`Application::without_caches`] says so (`stratum` as for
+    /// [`Application::shade`]).
+    fn reference(
+        &self,
+        cx: &Self::Prepared<'_>,
+        s: &ShadingPoint,
+        rng: &mut Rng,
+        stratum: Stratum,
+        rays: &mut RayCounters,
+    ) -> [f32; 3];
 
     /// Bytes `record` occupies, heap included (for the memory report; asked before and after
     /// [`Application::finish_record`]).

@@ -1,5 +1,6 @@
 //! Sampling building blocks shared by every stage that draws random numbers: counter-based random streams
-//! keyed by (seed, stage, index) ([`rng`]), low-discrepancy point sets ([`sequence`]), warps from the unit
+//! keyed by (seed, stage, index) ([`rng`]), draws stratified across a pixel's sub-pixel samples
+//! ([`stratum`]), low-discrepancy point sets ([`sequence`]), warps from the unit
 //! square to hemispheres and disks ([`warp`]) and orthonormal frames ([`frame`]).
 //!
 //! Nothing here knows about scenes or images; it depends only on glam.
@@ -7,7 +8,9 @@
 pub mod frame;
 pub mod rng;
 pub mod sequence;
+pub mod stratum;
 pub mod warp;
 
 pub use frame::Frame;
 pub use rng::{Rng, hash3};
+pub use stratum::Stratum;

@@ -1,8 +1,10 @@
 //! STAGE 5 (application, importance caching): how a shading point draws VPLs from its caches
 //! (ALGORITHMS.md §6.3, "bilateral MIS") — the four techniques F (full, with visibility), U (unoccluded),
 //! B (bounded over the cache's region) and C (conservative: uniform over all VPLs), each the uniform mixture
-//! of its distribution over the selected caches whose distribution is not all zero, one draw per technique,
-//! combined by the balance heuristic (default) or Georgiev's α-max heuristic (α = 1).
+//! of its distribution over the selected caches whose distribution is not all zero, n_t draws of technique t
+//! (one each by default), combined by the balance heuristic over the draw counts (Veach's multi-sample MIS: a
+//! draw of VPL j counts I_j / Σ_t n_t·p_t(j)) or Georgiev's α-max heuristic (α = 1: the technique with the
+//! largest n_t·p_t(j) takes the draw, weighted 1 / (n_t·p_t(j))).
 //!
 //! A technique none of the selected caches can draw from (every one of its distributions is 0) draws no
 //! sample and has density 0 in the combination (multi-sample MIS with n_t = 0). C is never empty, so every
@@ -22,10 +24,10 @@ pub const CONSERVATIVE: usize = 3;
 /// How the techniques' samples are combined.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mis {
-    /// Balance heuristic: a sample of VPL j counts I_j / Σ_t p_t(j).
+    /// Balance heuristic: a sample of VPL j counts I_j / Σ_t n_t·p_t(j).
     Balance,
-    /// α-max with α = 1: a sample counts I_j / p_t(j) when its technique t has the largest p_t(j) (the
-    /// earliest of equals), else 0.
+    /// α-max with α = 1: a sample counts I_j / (n_t·p_t(j)) when its technique t has the largest n_t·p_t(j)
+    /// (the earliest of equals), else 0.
     AlphaMax,
 }
 
@@ -34,7 +36,7 @@ pub struct Mixture<I> {
     caches: I,
     /// Selected caches whose distribution of each stored technique is not all zero.
     counts: [u32; 3],
-    enabled: [bool; 4],
+    draws: [u32; 4],
     vpls: usize,
 }
 
@@ -42,22 +44,28 @@ impl<'a, I> Mixture<I>
 where
     I: Iterator<Item = &'a [Option<Quantised>; 3]> + Clone,
 {
-    /// The mixture over `caches` (their F, U, B distributions) of the techniques `enabled`, over `vpls`
-    /// VPLs.
-    pub fn new(caches: I, enabled: [bool; 4], vpls: usize) -> Self {
+    /// The mixture over `caches` (their F, U, B distributions) of the techniques, technique t drawing
+    /// `draws[t]` samples (0: not used), over `vpls` VPLs.
+    pub fn new(caches: I, draws: [u32; 4], vpls: usize) -> Self {
         let mut counts = [0u32; 3];
         for d in caches.clone() {
             for (t, c) in counts.iter_mut().enumerate() {
                 *c += d[t].is_some() as u32;
             }
         }
-        Mixture { caches, counts, enabled, vpls }
+        Mixture { caches, counts, draws, vpls }
     }
 
-    /// Whether technique `t` draws a sample.
+    /// Whether technique `t` draws samples.
     #[inline]
     pub fn active(&self, t: usize) -> bool {
-        self.enabled[t] && self.vpls > 0 && (t == CONSERVATIVE || self.counts[t] > 0)
+        self.draws[t] > 0 && self.vpls > 0 && (t == CONSERVATIVE || self.counts[t] > 0)
+    }
+
+    /// How many samples technique `t` draws (0 when it is not active).
+    #[inline]
+    pub fn draws(&self, t: usize) -> u32 {
+        if self.active(t) { self.draws[t] } else { 0 }
     }
 
     /// p_t(j): the probability that technique `t` draws VPL `j` (0 for an inactive technique).
@@ -73,26 +81,30 @@ where
         sum / self.counts[t] as f32
     }
 
-    /// A draw of technique `t`: a cache chosen uniformly among those that can draw, then a VPL from its
-    /// distribution; `None` for an inactive technique.
+    /// A draw of technique `t`: a cache chosen uniformly among those that can draw (with `rng`), then a VPL
+    /// from its distribution at 64 uniform bits `u` (C: the VPL at `u` directly), or, when `u` is `None`,
+    /// at bits drawn from `rng`; `None` for an inactive technique.
     #[inline]
-    pub fn sample(&self, t: usize, rng: &mut Rng) -> Option<usize> {
+    pub fn sample(&self, t: usize, u: Option<u64>, rng: &mut Rng) -> Option<usize> {
         if !self.active(t) {
             return None;
         }
         if t == CONSERVATIVE {
-            return Some(rng.below(self.vpls as u32) as usize);
+            return Some(match u {
+                Some(u) => ((u as u128 * self.vpls as u128) >> 64) as usize,
+                None => rng.below(self.vpls as u32) as usize,
+            });
         }
         let k = rng.below(self.counts[t]) as usize;
         let q = self.caches.clone().filter_map(|d| d[t].as_ref()).nth(k)?;
-        Some(q.sample(rng.next_u64()))
+        Some(q.sample(u.unwrap_or_else(|| rng.next_u64())))
     }
 
     /// What a sample of VPL `j` drawn by technique `t` is multiplied by (its contribution I_j times this
     /// is the sample's share of the estimate): the MIS weight over the density.
     #[inline]
     pub fn factor(&self, t: usize, j: usize, mis: Mis) -> f32 {
-        let p = [0, 1, 2, 3].map(|k| self.pdf(k, j));
+        let p = [0, 1, 2, 3].map(|k| self.draws(k) as f32 * self.pdf(k, j));
         match mis {
             Mis::Balance => {
                 let sum: f32 = p.iter().sum();
@@ -126,15 +138,14 @@ mod tests {
         ]
     }
 
-    /// The exact expectation of the estimator for contributions `i`: Σ_t Σ_j p_t(j)·factor_t(j)·I_j.
+    /// The exact expectation of the estimator for contributions `i`: Σ_t n_t Σ_j p_t(j)·factor_t(j)·I_j.
     fn expectation(
         m: &Mixture<impl Iterator<Item = &'static [Option<Quantised>; 3]> + Clone>,
         i: &[f32],
         mis: Mis,
     ) -> f32 {
         (0..4)
-            .filter(|&t| m.active(t))
-            .map(|t| (0..i.len()).map(|j| m.pdf(t, j) * m.factor(t, j, mis) * i[j]).sum::<f32>())
+            .map(|t| m.draws(t) as f32 * (0..i.len()).map(|j| m.pdf(t, j) * m.factor(t, j, mis) * i[j]).sum::<f32>())
             .sum()
     }
 
@@ -143,15 +154,16 @@ mod tests {
         let c: &'static [[Option<Quantised>; 3]] = Box::leak(caches().into_boxed_slice());
         let i = [0.5, 1.0, 2.0, 0.25, 3.0, 7.0];
         let exact: f32 = i.iter().sum();
-        for bits in 0..16u32 {
-            let enabled = [0, 1, 2, 3].map(|k| bits >> k & 1 == 1);
-            if !enabled[CONSERVATIVE] {
+        // Every technique drawing 0, 1 or 2 samples (3⁴ combinations), C at least once.
+        for code in 0..81u32 {
+            let draws = [0, 1, 2, 3].map(|k| code / 3u32.pow(k) % 3);
+            if draws[CONSERVATIVE] == 0 {
                 continue;
             }
             for mis in [Mis::Balance, Mis::AlphaMax] {
-                let m = Mixture::new(c.iter(), enabled, i.len());
+                let m = Mixture::new(c.iter(), draws, i.len());
                 let e = expectation(&m, &i, mis);
-                assert!((e - exact).abs() < 1e-4 * exact, "{enabled:?} {mis:?}: {e} vs {exact}");
+                assert!((e - exact).abs() < 1e-4 * exact, "{draws:?} {mis:?}: {e} vs {exact}");
             }
         }
     }
@@ -159,7 +171,7 @@ mod tests {
     #[test]
     fn without_c_a_vpl_no_distribution_reaches_is_lost() {
         let c: &'static [[Option<Quantised>; 3]] = Box::leak(caches().into_boxed_slice());
-        let m = Mixture::new(c.iter(), [true, false, false, false], 6);
+        let m = Mixture::new(c.iter(), [1, 0, 0, 0], 6);
         let i = [0.0, 0.0, 0.0, 0.0, 3.0, 0.0];
         assert_eq!(expectation(&m, &i, Mis::Balance), 0.0, "F alone never draws VPL 4");
         let pdf_sum: f32 = (0..6).map(|j| m.pdf(0, j)).sum();
@@ -169,13 +181,13 @@ mod tests {
     #[test]
     fn draws_follow_the_mixture_density() {
         let c: &'static [[Option<Quantised>; 3]] = Box::leak(caches().into_boxed_slice());
-        let m = Mixture::new(c.iter(), [true; 4], 6);
+        let m = Mixture::new(c.iter(), [1; 4], 6);
         let mut rng = Rng::new(11);
         for t in 0..4 {
             let n = 200_000;
             let mut hits = [0u32; 6];
             for _ in 0..n {
-                hits[m.sample(t, &mut rng).unwrap()] += 1;
+                hits[m.sample(t, None, &mut rng).unwrap()] += 1;
             }
             for (j, &h) in hits.iter().enumerate() {
                 let p = m.pdf(t, j) as f64;
@@ -189,9 +201,9 @@ mod tests {
     fn a_technique_no_cache_can_draw_from_is_inactive() {
         let only: &'static [[Option<Quantised>; 3]] =
             Box::leak(vec![[None, None, Quantised::new(&[1.0, 1.0])]].into_boxed_slice());
-        let m = Mixture::new(only.iter(), [true; 4], 2);
+        let m = Mixture::new(only.iter(), [1; 4], 2);
         assert!(!m.active(0) && !m.active(1) && m.active(2) && m.active(3));
-        assert_eq!(m.sample(0, &mut Rng::new(1)), None);
+        assert_eq!(m.sample(0, None, &mut Rng::new(1)), None);
         assert_eq!(m.pdf(1, 0), 0.0);
     }
 }

@@ -7,11 +7,16 @@
 //! per VPL that could contribute, as in the paper) — and, once placement is over and the region the cache
 //! serves is known, an upper bound over that region (B); each is kept as a quantised distribution over the
 //! VPLs ([`distribution`], about one byte per VPL). A sub-pixel sample draws one VPL from each technique F,
-//! U, B and C (uniform over all VPLs), each the mixture of its selected caches' distributions, and combines
-//! them by multiple importance sampling ([`mixture`]): the balance heuristic by default, α-max as an
-//! option. Every draw costs one shadow ray. Directly seen emitters add their radiance. The few VPLs a
-//! near-specular lobe singles out at a shading point, and those closer to it than d_c, are drawn apart
-//! there, in every sampling mode ([`sharp`], parameters `splitcone` and `splitnear`).
+//! U, B and C (uniform over all VPLs; `distributions` may repeat a letter for more draws of it), each the
+//! mixture of its selected caches' distributions, and combines them by multiple importance sampling
+//! ([`mixture`]): the balance heuristic by default, α-max as an option. Every draw costs one shadow ray.
+//! The positions the draws take in the distributions are stratified across the pixel's sub-pixel samples
+//! ([`Stratum`], parameter `stratify`) — a choice beyond ALGORITHMS.md §6.3, which draws each sample
+//! independently: every draw alone is distributed as before, so the estimator is unchanged in expectation,
+//! and the pixel's samples stop clumping on the same VPLs (measured in `results/importance/README.md`).
+//! Directly seen emitters add their radiance. The few VPLs a near-specular lobe singles out at a shading
+//! point, and those closer to it than d_c, are drawn apart there, in every sampling mode ([`sharp`],
+//! parameters `splitcone` and `splitnear`).
 //!
 //! `placement none` is the reference: the exact sum over every VPL with visibility at every sub-pixel
 //! sample — the noise-free many-light image the cached estimator is unbiased for (same VPLs, same clamp).
@@ -31,7 +36,7 @@ use crate::error::{Error, Result, Warnings};
 use crate::gbuffer::ShadingPoint;
 use crate::render::lighting::Shading;
 use crate::render::params::{IntegratorParams, Parameter};
-use crate::sampling::Rng;
+use crate::sampling::{Rng, Stratum};
 use crate::scene::Scene;
 use crate::scene::accel::OccluderHint;
 use crate::scene::ray::RayCounters;
@@ -46,6 +51,12 @@ use vpl::{Receiver, Vpls};
 
 /// Stream tag of VPL generation.
 const STAGE_VPLS: u64 = 0x7670_6c73;
+
+/// Stratum stream of the baselines' draws (the techniques use their index, 0–3).
+const STREAM_BASELINE: u64 = 16;
+
+/// Most draws one technique may make per sample (letters repeated in `distributions`).
+const MAX_TECHNIQUE_DRAWS: u32 = 16;
 
 /// Most VPLs a render may ask for (beyond the memory check).
 const MAX_VPLS: i64 = 1 << 26;
@@ -82,8 +93,8 @@ pub struct ImportanceCache {
     pub vpl_seed: u64,
     /// d_c as a fraction of the scene's diagonal.
     pub clamp: f32,
-    /// Which techniques (F, U, B, C) draw samples.
-    pub enabled: [bool; 4],
+    /// Samples each technique (F, U, B, C) draws per sub-pixel sample (0: not used).
+    pub techniques: [u32; 4],
     /// How their samples are combined.
     pub mis: Mis,
     /// Caches, or a baseline without them.
@@ -98,6 +109,9 @@ pub struct ImportanceCache {
     /// Widest angle, degrees, of a run of VPLs whose shadow rays a cache's record shares (0: one ray per
     /// VPL; [`visibility`]).
     pub vis_angle: f32,
+    /// Whether the draws of a pixel's sub-pixel samples are stratified across them ([`Stratum`]; else each
+    /// sample draws independently).
+    pub stratify: bool,
 }
 
 /// One importance cache: where it is (B is built from it once its region is known) and its F, U and B
@@ -140,13 +154,13 @@ impl Lit<'_> {
         self.vpls.contribution(self.scene, &self.shading, j, x, rays)
     }
 
-    /// A VPL drawn in proportion to its flux, with its probability.
-    fn sample_power(&self, rng: &mut Rng) -> Option<(usize, f64)> {
+    /// A VPL drawn in proportion to its flux with 64 uniform bits `u`, with its probability.
+    fn sample_power(&self, u: u64) -> Option<(usize, f64)> {
         let total = *self.flux_cdf.last()?;
         if total.is_nan() || total <= 0.0 {
             return None;
         }
-        let target = (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64) * total;
+        let target = (u >> 11) as f64 * (1.0 / (1u64 << 53) as f64) * total;
         let j = self.flux_cdf.partition_point(|&c| c <= target).min(self.flux_cdf.len() - 1);
         let p = (self.flux_cdf[j] - if j == 0 { 0.0 } else { self.flux_cdf[j - 1] }) / total;
         (p > 0.0).then_some((j, p))
@@ -154,27 +168,41 @@ impl Lit<'_> {
 }
 
 impl ImportanceCache {
-    /// VPLs a baseline draws per sample: `draws`, or one per enabled technique.
+    /// VPLs a baseline draws per sample: `draws`, or as many as the techniques draw together.
     fn baseline_draws(&self) -> u32 {
-        if self.draws > 0 { self.draws } else { self.enabled.iter().filter(|&&e| e).count() as u32 }
+        if self.draws > 0 { self.draws } else { self.techniques.iter().sum() }
     }
 
-    /// The enabled techniques as the letters of the `distributions` parameter.
+    /// The techniques as the letters of the `distributions` parameter (a letter per draw).
     fn letters(&self) -> String {
-        (0..4).filter(|&t| self.enabled[t]).map(|t| LETTERS[t]).collect()
+        (0..4).flat_map(|t| std::iter::repeat_n(LETTERS[t], self.techniques[t] as usize)).collect()
     }
 
     /// The per-sample baselines: [`ImportanceCache::baseline_draws`] VPLs drawn uniformly or by flux,
     /// averaged.
-    fn baseline(&self, cx: &Lit<'_>, x: &Receiver, rng: &mut Rng, rays: &mut RayCounters) -> Spectrum {
+    fn baseline(
+        &self,
+        cx: &Lit<'_>,
+        x: &Receiver,
+        rng: &mut Rng,
+        stratum: Stratum,
+        rays: &mut RayCounters,
+    ) -> Spectrum {
         let n = cx.vpls.len();
         let k = self.baseline_draws().max(1);
         let split = cx.split.at(x);
         let mut l = split.estimate(cx.scene, &cx.shading, &cx.vpls, x, k, rng, rays);
-        for _ in 0..k {
+        for d in 0..k {
+            let u = self.stratify.then(|| stratum.draw(STREAM_BASELINE, d, k));
             let (j, p) = match self.sampling {
-                Sampling::Uniform if n > 0 => (rng.below(n as u32) as usize, 1.0 / n as f64),
-                Sampling::Power => match cx.sample_power(rng) {
+                Sampling::Uniform if n > 0 => {
+                    let j = match u {
+                        Some(u) => ((u as u128 * n as u128) >> 64) as usize,
+                        None => rng.below(n as u32) as usize,
+                    };
+                    (j, 1.0 / n as f64)
+                }
+                Sampling::Power => match cx.sample_power(u.unwrap_or_else(|| rng.next_u64())) {
                     Some(d) => d,
                     None => continue,
                 },
@@ -219,7 +247,7 @@ impl Application for ImportanceCache {
             "distributions",
             "string",
             "fubc",
-            "techniques that draw: f full, u unoccluded, b bounded, c conservative",
+            "techniques that draw, a letter per draw: f full, u unoccluded, b bounded, c conservative",
         ),
         Parameter::new("mis", "string", "balance", "combination of the techniques: balance or alphamax"),
         Parameter::new(
@@ -254,6 +282,12 @@ impl Application for ImportanceCache {
             "10",
             "degrees: a cache traces only the two ends of a run of VPLs this close together as it sees them, \
              and takes the run as visible when both are (else traces every member; 0: one ray per VPL)",
+        ),
+        Parameter::new(
+            "stratify",
+            "bool",
+            "true",
+            "the VPL draws of a pixel's sub-pixel samples are stratified across them (false: independent draws)",
         ),
     ];
     const DGS_GEOMETRY: bool = false;
@@ -296,19 +330,21 @@ impl Application for ImportanceCache {
             return Err(bad("clamp", format!("must be a finite number ≥ 0, got {clamp}")));
         }
         let letters = p.string_or("distributions", "fubc")?;
-        let mut enabled = [false; 4];
+        let mut techniques = [0u32; 4];
         for ch in letters.chars() {
             match LETTERS.iter().position(|&l| l == ch.to_ascii_lowercase()) {
-                Some(t) if !enabled[t] => enabled[t] = true,
+                Some(t) if techniques[t] < MAX_TECHNIQUE_DRAWS => techniques[t] += 1,
                 _ => {
                     return Err(bad(
                         "distributions",
-                        format!("must be distinct letters of f, u, b, c (e.g. \"fubc\"), got \"{letters}\""),
+                        format!(
+                            "must be letters of f, u, b, c, each at most {MAX_TECHNIQUE_DRAWS} times (e.g. \"fubc\"), got \"{letters}\""
+                        ),
                     ));
                 }
             }
         }
-        if !enabled.iter().any(|&e| e) {
+        if techniques.iter().all(|&n| n == 0) {
             return Err(bad("distributions", "must name at least one of f, u, b, c".into()));
         }
         let mis = match p.string_or("mis", "balance")?.as_str() {
@@ -341,6 +377,7 @@ impl Application for ImportanceCache {
             return Err(bad("visangle", format!("must be between 0 and 45 degrees, got {vis_angle}")));
         }
         Ok(ImportanceCache {
+            stratify: p.bool_or("stratify", true)?,
             vis_angle: vis_angle as f32,
             split_cone: split_cone as f32,
             split_near: split_near as f32,
@@ -349,7 +386,7 @@ impl Application for ImportanceCache {
             max_depth: max_depth as u32,
             vpl_seed: p.int_or("vplseed", 0)? as u64,
             clamp: clamp as f32,
-            enabled,
+            techniques,
             mis,
             sampling,
         })
@@ -409,6 +446,7 @@ impl Application for ImportanceCache {
                 "visangle",
                 serde_json::Number::from_f64(self.vis_angle as f64).map_or(serde_json::Value::Null, Into::into),
             ),
+            ("stratify", self.stratify.into()),
         ]
     }
 
@@ -503,9 +541,9 @@ impl Application for ImportanceCache {
 
     /// B needs the region the cache serves; techniques that are not used are dropped.
     fn finish_record(&self, cx: &Lit<'_>, record: &mut ImportanceRecord, region: f32) {
-        record.dists[2] = if self.enabled[2] { self.bounded(cx, &record.at, region) } else { None };
+        record.dists[2] = if self.techniques[2] > 0 { self.bounded(cx, &record.at, region) } else { None };
         for t in 0..2 {
-            if !self.enabled[t] {
+            if self.techniques[t] == 0 {
                 record.dists[t] = None;
             }
         }
@@ -517,30 +555,42 @@ impl Application for ImportanceCache {
         s: &ShadingPoint,
         near: &[Neighbour<'_, ImportanceRecord>],
         rng: &mut Rng,
+        stratum: Stratum,
         rays: &mut RayCounters,
     ) -> [f32; 3] {
         let mut l = cx.emitted(s);
         if let Some(x) = cx.receiver(s) {
-            let mix = Mixture::new(near.iter().map(|c| &c.record.dists), self.enabled, cx.vpls.len());
+            let mix = Mixture::new(near.iter().map(|c| &c.record.dists), self.techniques, cx.vpls.len());
             let split = cx.split.at(&x);
             l += split.estimate(cx.scene, &cx.shading, &cx.vpls, &x, self.baseline_draws(), rng, rays);
             for t in 0..4 {
-                let Some(j) = mix.sample(t, rng) else { continue };
-                let factor = mix.factor(t, j, self.mis);
-                if factor > 0.0 && !split.holds(&cx.vpls, j) {
-                    l += cx.contribution(j, &x, rays) * factor;
+                let m = mix.draws(t);
+                for d in 0..m {
+                    let u = self.stratify.then(|| stratum.draw(t as u64, d, m));
+                    let Some(j) = mix.sample(t, u, rng) else { break };
+                    let factor = mix.factor(t, j, self.mis);
+                    if factor > 0.0 && !split.holds(&cx.vpls, j) {
+                        l += cx.contribution(j, &x, rays) * factor;
+                    }
                 }
             }
         }
         l.to_array()
     }
 
-    fn reference(&self, cx: &Lit<'_>, s: &ShadingPoint, rng: &mut Rng, rays: &mut RayCounters) -> [f32; 3] {
+    fn reference(
+        &self,
+        cx: &Lit<'_>,
+        s: &ShadingPoint,
+        rng: &mut Rng,
+        stratum: Stratum,
+        rays: &mut RayCounters,
+    ) -> [f32; 3] {
         let mut l = cx.emitted(s);
         if let Some(x) = cx.receiver(s) {
             l += match self.sampling {
                 Sampling::Cache => (0..cx.vpls.len()).map(|j| cx.contribution(j, &x, rays)).sum(),
-                _ => self.baseline(cx, &x, rng, rays),
+                _ => self.baseline(cx, &x, rng, stratum, rays),
             };
         }
         l.to_array()
@@ -572,13 +622,14 @@ mod tests {
             max_depth: 5,
             vpl_seed: 0,
             clamp: 0.025,
-            enabled: [true; 4],
+            techniques: [1; 4],
             mis: Mis::Balance,
             sampling: Sampling::Cache,
             draws: 0,
             split_cone: 10.0,
             split_near: 1.0,
             vis_angle: 10.0,
+            stratify: true,
         };
         let total = 25_000 * app.record_bytes_bound();
         assert!(total <= 1_000_000_000, "{total}");

@@ -19,9 +19,9 @@ use crate::error::{Error, Result};
 use crate::gbuffer::{GBuffer, PixelId, shading_point};
 use crate::image::Image;
 use crate::placement::{CacheId, CacheOracle, registry};
-use crate::sampling::Rng;
 use crate::sampling::rng::{hash3, mix64};
 use crate::sampling::sequence::sobol02;
+use crate::sampling::{Rng, Stratum};
 use crate::scene::Scene;
 use crate::scene::ray::RayCounters;
 
@@ -286,21 +286,22 @@ fn shade_image<A: Application>(
                         let u = subpixel(x, y, i);
                         rays.camera += 1;
                         if let Some(sp) = shading_point(scene, [x as f32 + u[0], y as f32 + u[1]]) {
-                            points.push((col, key(x, i), sp));
+                            let stratum = Stratum::new(s.seed, key(x, 0), i, n);
+                            points.push((col, key(x, i), stratum, sp));
                         }
                     }
                 }
                 let mut add = |col: usize, v: [f32; 3]| (0..3).for_each(|k| out[col][k] += v[k]);
                 if reference {
-                    for &(col, k, sp) in &points {
+                    for &(col, k, stratum, sp) in &points {
                         let mut rng = Rng::keyed(s.seed, STAGE_SHADE, k);
-                        add(col, app.reference(cx, &sp, &mut rng, &mut rays));
+                        add(col, app.reference(cx, &sp, &mut rng, stratum, &mut rays));
                     }
                 } else if let Some(index) = caches.index {
                     queries.clear();
-                    queries.extend(points.iter().map(|(_, _, sp)| (sp.p, sp.n)));
+                    queries.extend(points.iter().map(|(_, _, _, sp)| (sp.p, sp.n)));
                     index.select_group_in(&queries, &mut lookup, |j, near| {
-                        let (col, k, sp) = &points[j];
+                        let (col, k, stratum, sp) = &points[j];
                         index.interpolate_weights(near, &mut weights);
                         blend.clear();
                         blend.extend(weights.iter().map(|&(id, weight)| {
@@ -309,7 +310,7 @@ fn shade_image<A: Application>(
                         }));
                         if !blend.is_empty() {
                             let mut rng = Rng::keyed(s.seed, STAGE_SHADE, *k);
-                            add(*col, app.shade(cx, sp, &blend, &mut rng, &mut rays));
+                            add(*col, app.shade(cx, sp, &blend, &mut rng, *stratum, &mut rays));
                         }
                     });
                 }
