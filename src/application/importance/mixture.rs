@@ -6,20 +6,31 @@
 //! draw of VPL j counts I_j / Σ_t n_t·p_t(j)) or Georgiev's α-max heuristic (α = 1: the technique with the
 //! largest n_t·p_t(j) takes the draw, weighted 1 / (n_t·p_t(j))).
 //!
-//! A technique none of the selected caches can draw from (every one of its distributions is 0) draws no
-//! sample and has density 0 in the combination (multi-sample MIS with n_t = 0). C is never empty, so every
-//! VPL that contributes has a positive density in the combination and the estimator is unbiased.
+//! A fifth technique, G ([`super::lobe`]), joins the combination at shading points whose glossy lobe is in
+//! its range: it draws in proportion to flux among the VPL clusters the lobe's cone meets.
 //!
-//! Depends on the record's distributions only.
+//! A technique none of the selected caches can draw from (every one of its distributions is 0), or G where
+//! the shading point has no lobe for it, draws no sample and has density 0 in the combination
+//! (multi-sample MIS with n_t = 0). C is never empty, so every VPL that contributes has a positive density
+//! in the combination and the estimator is unbiased.
+//!
+//! Depends on the record's distributions and the shading point's lobe only.
 
 use super::distribution::Quantised;
+use super::lobe::Lobe;
 use crate::sampling::Rng;
 
 /// The techniques, in the order the combination and the parameter's letters use.
-pub const LETTERS: [char; 4] = ['f', 'u', 'b', 'c'];
+pub const LETTERS: [char; TECHNIQUES] = ['f', 'u', 'b', 'c', 'g'];
+
+/// How many techniques there are.
+pub const TECHNIQUES: usize = 5;
 
 /// The conservative technique's index.
 pub const CONSERVATIVE: usize = 3;
+
+/// The lobe technique's index.
+pub const LOBE: usize = 4;
 
 /// How the techniques' samples are combined.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -31,35 +42,43 @@ pub enum Mis {
     AlphaMax,
 }
 
-/// The stored distributions (F, U, B) of the selected caches, as the shading point sees them.
-pub struct Mixture<I> {
+/// The stored distributions (F, U, B) of the selected caches, and the shading point's lobe, as the shading
+/// point sees them.
+pub struct Mixture<'l, I> {
     caches: I,
     /// Selected caches whose distribution of each stored technique is not all zero.
     counts: [u32; 3],
-    draws: [u32; 4],
+    draws: [u32; TECHNIQUES],
     vpls: usize,
+    lobe: Option<Lobe<'l>>,
 }
 
-impl<'a, I> Mixture<I>
+impl<'a, 'l, I> Mixture<'l, I>
 where
     I: Iterator<Item = &'a [Option<Quantised>; 3]> + Clone,
 {
-    /// The mixture over `caches` (their F, U, B distributions) of the techniques, technique t drawing
-    /// `draws[t]` samples (0: not used), over `vpls` VPLs.
-    pub fn new(caches: I, draws: [u32; 4], vpls: usize) -> Self {
+    /// The mixture over `caches` (their F, U, B distributions) and the shading point's `lobe` of the
+    /// techniques, technique t drawing `draws[t]` samples (0: not used), over `vpls` VPLs.
+    pub fn new(caches: I, draws: [u32; TECHNIQUES], vpls: usize, lobe: Option<Lobe<'l>>) -> Self {
         let mut counts = [0u32; 3];
         for d in caches.clone() {
             for (t, c) in counts.iter_mut().enumerate() {
                 *c += d[t].is_some() as u32;
             }
         }
-        Mixture { caches, counts, draws, vpls }
+        Mixture { caches, counts, draws, vpls, lobe }
     }
 
     /// Whether technique `t` draws samples.
     #[inline]
     pub fn active(&self, t: usize) -> bool {
-        self.draws[t] > 0 && self.vpls > 0 && (t == CONSERVATIVE || self.counts[t] > 0)
+        self.draws[t] > 0
+            && self.vpls > 0
+            && match t {
+                CONSERVATIVE => true,
+                LOBE => self.lobe.is_some(),
+                _ => self.counts[t] > 0,
+            }
     }
 
     /// How many samples technique `t` draws (0 when it is not active).
@@ -77,13 +96,16 @@ where
         if t == CONSERVATIVE {
             return 1.0 / self.vpls as f32;
         }
+        if let (LOBE, Some(lobe)) = (t, &self.lobe) {
+            return lobe.pdf(j);
+        }
         let sum: f32 = self.caches.clone().filter_map(|d| d[t].as_ref()).map(|q| q.pdf(j)).sum();
         sum / self.counts[t] as f32
     }
 
     /// A draw of technique `t`: a cache chosen uniformly among those that can draw (with `rng`), then a VPL
-    /// from its distribution at 64 uniform bits `u` (C: the VPL at `u` directly), or, when `u` is `None`,
-    /// at bits drawn from `rng`; `None` for an inactive technique.
+    /// from its distribution at 64 uniform bits `u` (C: the VPL at `u` directly; G: the lobe's VPL at `u`),
+    /// or, when `u` is `None`, at bits drawn from `rng`; `None` for an inactive technique.
     #[inline]
     pub fn sample(&self, t: usize, u: Option<u64>, rng: &mut Rng) -> Option<usize> {
         if !self.active(t) {
@@ -95,6 +117,9 @@ where
                 None => rng.below(self.vpls as u32) as usize,
             });
         }
+        if let (LOBE, Some(lobe)) = (t, &self.lobe) {
+            return Some(lobe.sample(u.unwrap_or_else(|| rng.next_u64())));
+        }
         let k = rng.below(self.counts[t]) as usize;
         let q = self.caches.clone().filter_map(|d| d[t].as_ref()).nth(k)?;
         Some(q.sample(u.unwrap_or_else(|| rng.next_u64())))
@@ -104,7 +129,7 @@ where
     /// is the sample's share of the estimate): the MIS weight over the density.
     #[inline]
     pub fn factor(&self, t: usize, j: usize, mis: Mis) -> f32 {
-        let p = [0, 1, 2, 3].map(|k| self.draws(k) as f32 * self.pdf(k, j));
+        let p: [f32; TECHNIQUES] = std::array::from_fn(|k| self.draws(k) as f32 * self.pdf(k, j));
         match mis {
             Mis::Balance => {
                 let sum: f32 = p.iter().sum();
@@ -112,7 +137,7 @@ where
             }
             Mis::AlphaMax => {
                 // The winner: the first technique with the largest density.
-                let best = (0..4).fold(0, |b, k| if p[k] > p[b] { k } else { b });
+                let best = (0..TECHNIQUES).fold(0, |b, k| if p[k] > p[b] { k } else { b });
                 if best == t && p[t] > 0.0 { 1.0 / p[t] } else { 0.0 }
             }
         }
@@ -140,11 +165,11 @@ mod tests {
 
     /// The exact expectation of the estimator for contributions `i`: Σ_t n_t Σ_j p_t(j)·factor_t(j)·I_j.
     fn expectation(
-        m: &Mixture<impl Iterator<Item = &'static [Option<Quantised>; 3]> + Clone>,
+        m: &Mixture<'_, impl Iterator<Item = &'static [Option<Quantised>; 3]> + Clone>,
         i: &[f32],
         mis: Mis,
     ) -> f32 {
-        (0..4)
+        (0..TECHNIQUES)
             .map(|t| m.draws(t) as f32 * (0..i.len()).map(|j| m.pdf(t, j) * m.factor(t, j, mis) * i[j]).sum::<f32>())
             .sum()
     }
@@ -154,14 +179,15 @@ mod tests {
         let c: &'static [[Option<Quantised>; 3]] = Box::leak(caches().into_boxed_slice());
         let i = [0.5, 1.0, 2.0, 0.25, 3.0, 7.0];
         let exact: f32 = i.iter().sum();
-        // Every technique drawing 0, 1 or 2 samples (3⁴ combinations), C at least once.
+        // Every technique drawing 0, 1 or 2 samples (3⁴ combinations), C at least once (G has no lobe here).
         for code in 0..81u32 {
-            let draws = [0, 1, 2, 3].map(|k| code / 3u32.pow(k) % 3);
+            let draws: [u32; TECHNIQUES] =
+                std::array::from_fn(|k| if k == LOBE { 1 } else { code / 3u32.pow(k as u32) % 3 });
             if draws[CONSERVATIVE] == 0 {
                 continue;
             }
             for mis in [Mis::Balance, Mis::AlphaMax] {
-                let m = Mixture::new(c.iter(), draws, i.len());
+                let m = Mixture::new(c.iter(), draws, i.len(), None);
                 let e = expectation(&m, &i, mis);
                 assert!((e - exact).abs() < 1e-4 * exact, "{draws:?} {mis:?}: {e} vs {exact}");
             }
@@ -171,7 +197,7 @@ mod tests {
     #[test]
     fn without_c_a_vpl_no_distribution_reaches_is_lost() {
         let c: &'static [[Option<Quantised>; 3]] = Box::leak(caches().into_boxed_slice());
-        let m = Mixture::new(c.iter(), [1, 0, 0, 0], 6);
+        let m = Mixture::new(c.iter(), [1, 0, 0, 0, 0], 6, None);
         let i = [0.0, 0.0, 0.0, 0.0, 3.0, 0.0];
         assert_eq!(expectation(&m, &i, Mis::Balance), 0.0, "F alone never draws VPL 4");
         let pdf_sum: f32 = (0..6).map(|j| m.pdf(0, j)).sum();
@@ -181,9 +207,9 @@ mod tests {
     #[test]
     fn draws_follow_the_mixture_density() {
         let c: &'static [[Option<Quantised>; 3]] = Box::leak(caches().into_boxed_slice());
-        let m = Mixture::new(c.iter(), [1; 4], 6);
+        let m = Mixture::new(c.iter(), [1; TECHNIQUES], 6, None);
         let mut rng = Rng::new(11);
-        for t in 0..4 {
+        for t in 0..CONSERVATIVE + 1 {
             let n = 200_000;
             let mut hits = [0u32; 6];
             for _ in 0..n {
@@ -201,7 +227,7 @@ mod tests {
     fn a_technique_no_cache_can_draw_from_is_inactive() {
         let only: &'static [[Option<Quantised>; 3]] =
             Box::leak(vec![[None, None, Quantised::new(&[1.0, 1.0])]].into_boxed_slice());
-        let m = Mixture::new(only.iter(), [1; 4], 2);
+        let m = Mixture::new(only.iter(), [1; TECHNIQUES], 2, None);
         assert!(!m.active(0) && !m.active(1) && m.active(2) && m.active(3));
         assert_eq!(m.sample(0, None, &mut Rng::new(1)), None);
         assert_eq!(m.pdf(1, 0), 0.0);

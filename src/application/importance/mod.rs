@@ -16,7 +16,9 @@
 //! and the pixel's samples stop clumping on the same VPLs (measured in `results/importance/README.md`).
 //! Directly seen emitters add their radiance. The few VPLs a near-specular lobe singles out at a shading
 //! point, and those closer to it than d_c, are drawn apart there, in every sampling mode ([`sharp`],
-//! parameters `splitcone` and `splitnear`).
+//! parameters `splitcone` and `splitnear`). A glossy lobe wider than that (up to `lobecone`) adds a fifth
+//! technique, G, drawing in proportion to flux among the VPL clusters its cone meets ([`lobe`]) — beyond
+//! ALGORITHMS.md §6.3's four, for the glossy receivers whose caches give their lobe's VPLs no density.
 //!
 //! `placement none` is the reference: the exact sum over every VPL with visibility at every sub-pixel
 //! sample — the noise-free many-light image the cached estimator is unbiased for (same VPLs, same clamp).
@@ -27,6 +29,7 @@
 //! without the geometry term ([`Application::DGS_GEOMETRY`]; `vgc+dgs:geom` still has it).
 
 pub mod distribution;
+pub mod lobe;
 pub mod mixture;
 pub mod sharp;
 pub mod visibility;
@@ -45,14 +48,15 @@ use crate::shading::{Spectrum, luminance};
 
 use super::{Application, Baseline, Neighbour, PerSample};
 use distribution::Quantised;
-use mixture::{LETTERS, Mis, Mixture};
+use lobe::Clusters;
+use mixture::{LETTERS, LOBE, Mis, Mixture, TECHNIQUES};
 use sharp::Split;
 use vpl::{Receiver, Vpls};
 
 /// Stream tag of VPL generation.
 const STAGE_VPLS: u64 = 0x7670_6c73;
 
-/// Stratum stream of the baselines' draws (the techniques use their index, 0–3).
+/// Stratum stream of the baselines' draws (the techniques use their index, 0–4).
 const STREAM_BASELINE: u64 = 16;
 
 /// Most draws one technique may make per sample (letters repeated in `distributions`).
@@ -93,8 +97,9 @@ pub struct ImportanceCache {
     pub vpl_seed: u64,
     /// d_c as a fraction of the scene's diagonal.
     pub clamp: f32,
-    /// Samples each technique (F, U, B, C) draws per sub-pixel sample (0: not used).
-    pub techniques: [u32; 4],
+    /// Samples each technique (F, U, B, C, G) draws per sub-pixel sample (0: not used; G only where the
+    /// shading point has a lobe in its range).
+    pub techniques: [u32; TECHNIQUES],
     /// How their samples are combined.
     pub mis: Mis,
     /// Caches, or a baseline without them.
@@ -109,6 +114,9 @@ pub struct ImportanceCache {
     /// Widest angle, degrees, of a run of VPLs whose shadow rays a cache's record shares (0: one ray per
     /// VPL; [`visibility`]).
     pub vis_angle: f32,
+    /// Widest glossy lobe, degrees, for which the lobe technique G draws (lobes wider than `split_cone`;
+    /// [`lobe`]).
+    pub lobe_cone: f32,
     /// Whether the draws of a pixel's sub-pixel samples are stratified across them ([`Stratum`]; else each
     /// sample draws independently).
     pub stratify: bool,
@@ -131,6 +139,8 @@ pub struct Lit<'s> {
     flux_cdf: Vec<f64>,
     /// The split: near VPLs and near-specular lobes.
     split: Split,
+    /// The VPL clusters of the lobe technique G.
+    lobes: Clusters,
 }
 
 impl Lit<'_> {
@@ -168,14 +178,15 @@ impl Lit<'_> {
 }
 
 impl ImportanceCache {
-    /// VPLs a baseline draws per sample: `draws`, or as many as the techniques draw together.
+    /// VPLs a baseline draws per sample: `draws`, or as many as the techniques F, U, B and C draw together
+    /// (G draws only at some shading points). Also the split's shadow rays under importance caching.
     fn baseline_draws(&self) -> u32 {
-        if self.draws > 0 { self.draws } else { self.techniques.iter().sum() }
+        if self.draws > 0 { self.draws } else { self.techniques[..LOBE].iter().sum() }
     }
 
     /// The techniques as the letters of the `distributions` parameter (a letter per draw).
     fn letters(&self) -> String {
-        (0..4).flat_map(|t| std::iter::repeat_n(LETTERS[t], self.techniques[t] as usize)).collect()
+        (0..TECHNIQUES).flat_map(|t| std::iter::repeat_n(LETTERS[t], self.techniques[t] as usize)).collect()
     }
 
     /// The per-sample baselines: [`ImportanceCache::baseline_draws`] VPLs drawn uniformly or by flux,
@@ -246,8 +257,8 @@ impl Application for ImportanceCache {
         Parameter::new(
             "distributions",
             "string",
-            "fubc",
-            "techniques that draw, a letter per draw: f full, u unoccluded, b bounded, c conservative",
+            "fubcg",
+            "techniques that draw, a letter per draw: f full, u unoccluded, b bounded, c conservative, g lobe",
         ),
         Parameter::new("mis", "string", "balance", "combination of the techniques: balance or alphamax"),
         Parameter::new(
@@ -282,6 +293,13 @@ impl Application for ImportanceCache {
             "10",
             "degrees: a cache traces only the two ends of a run of VPLs this close together as it sees them, \
              and takes the run as visible when both are (else traces every member; 0: one ray per VPL)",
+        ),
+        Parameter::new(
+            "lobecone",
+            "float",
+            "45",
+            "degrees: the widest glossy lobe (wider than splitcone) for which the lobe technique g draws a VPL \
+             in proportion to flux among the VPL clusters its cone meets",
         ),
         Parameter::new(
             "stratify",
@@ -329,8 +347,8 @@ impl Application for ImportanceCache {
         if !(clamp >= 0.0 && clamp.is_finite()) {
             return Err(bad("clamp", format!("must be a finite number ≥ 0, got {clamp}")));
         }
-        let letters = p.string_or("distributions", "fubc")?;
-        let mut techniques = [0u32; 4];
+        let letters = p.string_or("distributions", "fubcg")?;
+        let mut techniques = [0u32; TECHNIQUES];
         for ch in letters.chars() {
             match LETTERS.iter().position(|&l| l == ch.to_ascii_lowercase()) {
                 Some(t) if techniques[t] < MAX_TECHNIQUE_DRAWS => techniques[t] += 1,
@@ -338,14 +356,14 @@ impl Application for ImportanceCache {
                     return Err(bad(
                         "distributions",
                         format!(
-                            "must be letters of f, u, b, c, each at most {MAX_TECHNIQUE_DRAWS} times (e.g. \"fubc\"), got \"{letters}\""
+                            "must be letters of f, u, b, c, g, each at most {MAX_TECHNIQUE_DRAWS} times (e.g. \"fubcg\"), got \"{letters}\""
                         ),
                     ));
                 }
             }
         }
         if techniques.iter().all(|&n| n == 0) {
-            return Err(bad("distributions", "must name at least one of f, u, b, c".into()));
+            return Err(bad("distributions", "must name at least one of f, u, b, c, g".into()));
         }
         let mis = match p.string_or("mis", "balance")?.as_str() {
             "balance" => Mis::Balance,
@@ -376,7 +394,12 @@ impl Application for ImportanceCache {
         if !(0.0..=45.0).contains(&vis_angle) {
             return Err(bad("visangle", format!("must be between 0 and 45 degrees, got {vis_angle}")));
         }
+        let lobe_cone = p.float_or("lobecone", 45.0)?;
+        if !(0.0..=90.0).contains(&lobe_cone) {
+            return Err(bad("lobecone", format!("must be between 0 and 90 degrees, got {lobe_cone}")));
+        }
         Ok(ImportanceCache {
+            lobe_cone: lobe_cone as f32,
             stratify: p.bool_or("stratify", true)?,
             vis_angle: vis_angle as f32,
             split_cone: split_cone as f32,
@@ -421,7 +444,8 @@ impl Application for ImportanceCache {
             })
             .collect();
         let split = Split::new(&vpls, self.split_cone.to_radians(), self.split_near * vpls.clamp2.sqrt());
-        Ok(Lit { scene, shading, vpls, flux_cdf, split })
+        let lobes = Clusters::new(&vpls, self.split_cone.to_radians(), self.lobe_cone.to_radians());
+        Ok(Lit { scene, shading, vpls, flux_cdf, split, lobes })
     }
 
     fn settings(&self) -> Vec<(&'static str, serde_json::Value)> {
@@ -445,6 +469,10 @@ impl Application for ImportanceCache {
             (
                 "visangle",
                 serde_json::Number::from_f64(self.vis_angle as f64).map_or(serde_json::Value::Null, Into::into),
+            ),
+            (
+                "lobecone",
+                serde_json::Number::from_f64(self.lobe_cone as f64).map_or(serde_json::Value::Null, Into::into),
             ),
             ("stratify", self.stratify.into()),
         ]
@@ -560,10 +588,11 @@ impl Application for ImportanceCache {
     ) -> [f32; 3] {
         let mut l = cx.emitted(s);
         if let Some(x) = cx.receiver(s) {
-            let mix = Mixture::new(near.iter().map(|c| &c.record.dists), self.techniques, cx.vpls.len());
+            let lobe = if self.techniques[LOBE] > 0 { cx.lobes.at(&x) } else { None };
+            let mix = Mixture::new(near.iter().map(|c| &c.record.dists), self.techniques, cx.vpls.len(), lobe);
             let split = cx.split.at(&x);
             l += split.estimate(cx.scene, &cx.shading, &cx.vpls, &x, self.baseline_draws(), rng, rays);
-            for t in 0..4 {
+            for t in 0..TECHNIQUES {
                 let m = mix.draws(t);
                 for d in 0..m {
                     let u = self.stratify.then(|| stratum.draw(t as u64, d, m));
@@ -622,7 +651,8 @@ mod tests {
             max_depth: 5,
             vpl_seed: 0,
             clamp: 0.025,
-            techniques: [1; 4],
+            techniques: [1, 1, 1, 1, 0],
+            lobe_cone: 45.0,
             mis: Mis::Balance,
             sampling: Sampling::Cache,
             draws: 0,
