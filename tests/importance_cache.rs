@@ -141,14 +141,9 @@ fn reference(loaded: &LoadedScene, base: &[(&str, &str)]) -> [f64; 4] {
     quadrants(&image(loaded, &set, 1))
 }
 
-/// A near-mirror metal floor (roughness 0.003) and a matte back wall under a lamp: the floor's lobe turns
+/// A metal floor of `roughness` and a matte back wall under a lamp. Near a mirror (0.003) the floor's lobe turns
 /// the lamp's and the wall's VPLs into spikes, and the VPLs on the floor send narrow beams onto the wall —
 /// both halves of the near-specular split.
-fn mirror_floor(res: u32) -> String {
-    metal_floor(res, 0.003)
-}
-
-/// [`mirror_floor`] with a floor of roughness `roughness`.
 fn metal_floor(res: u32, roughness: f32) -> String {
     format!(
         "LookAt 0 1.5 -4  0 0.8 0.5  0 1 0\nCamera \"perspective\" \"float fov\" 55\n\
@@ -163,6 +158,15 @@ fn metal_floor(res: u32, roughness: f32) -> String {
          AttributeEnd\nWorldEnd\n"
     )
 }
+
+/// The shipped room at 24×18: occluders and an area light, small enough for 64 seeds.
+fn small_room() -> LoadedScene {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/room.pbrt");
+    load(&path, LoadOptions { resolution: Some([24, 18]), ..Default::default() }).unwrap()
+}
+
+/// The settings the room's tests share.
+const ROOM_BASE: [(&str, &str); 3] = [("vpls", "256"), ("caches", "16"), ("subpixels", "4")];
 
 /// Per-quadrant standard deviation of `n` renders with `set` (seeds 500, 501, …).
 fn quadrant_sd(loaded: &LoadedScene, set: &[(&str, &str)], n: u64) -> [f64; 4] {
@@ -202,21 +206,29 @@ fn spread_ratio(
     a.iter().sum::<f64>() / b.iter().sum::<f64>()
 }
 
-#[test]
-fn the_near_specular_split_is_unbiased_and_takes_out_the_spikes() {
-    let loaded = loaded_text(&mirror_floor(24));
+/// The metal floor of `roughness` at 24×24 and the small settings its tests share, once every `extras`
+/// setting has been checked unbiased there.
+fn unbiased_on_a_metal_floor(
+    roughness: f32,
+    extras: &[[(&str, &str); 2]],
+) -> (LoadedScene, [(&'static str, &'static str); 3]) {
+    let loaded = loaded_text(&metal_floor(24, roughness));
     let base = [("vpls", "256"), ("caches", "12"), ("subpixels", "4")];
     let r = reference(&loaded, &base);
-    assert_each_unbiased(
-        &loaded,
-        &base,
+    assert_each_unbiased(&loaded, &base, extras, &r);
+    (loaded, base)
+}
+
+#[test]
+fn the_near_specular_split_is_unbiased_and_takes_out_the_spikes() {
+    let (loaded, base) = unbiased_on_a_metal_floor(
+        0.003,
         &[
             [("placement", "vgc+dgs"), ("mis", "balance")],
             [("placement", "im"), ("mis", "alphamax")],
             [("sampling", "power"), ("draws", "4")],
             [("sampling", "uniform"), ("draws", "4")],
         ],
-        &r,
     );
     // The split is what takes the spikes out: without it (splitcone 0) the same estimators spread wider.
     for extra in [("placement", "vgc+dgs"), ("sampling", "power")] {
@@ -283,9 +295,7 @@ fn cached_estimates_are_unbiased_for_every_technique_alone_and_combined_where_ea
 
 #[test]
 fn every_placement_and_both_heuristics_are_unbiased_with_occlusion_on_the_shipped_room() {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/room.pbrt");
-    let loaded = load(&path, LoadOptions { resolution: Some([24, 18]), ..Default::default() }).unwrap();
-    let base = [("vpls", "256"), ("caches", "16"), ("subpixels", "4")];
+    let (loaded, base) = (small_room(), ROOM_BASE);
     let r = reference(&loaded, &base);
     for (placement, mis) in [("vgc+dgs", "balance"), ("vgc+dgs", "alphamax"), ("im", "balance"), ("sd+as", "balance")] {
         let mut set = base.to_vec();
@@ -309,9 +319,7 @@ fn draws_stratified_across_a_pixels_samples_stay_unbiased_and_narrow_the_spread(
     // room at 96×72 the cached estimate's spread did not move (its 16 caches differ too much for the
     // positions in their distributions to mean the same VPLs), which the 640×360 scenes of
     // results/importance/README.md do not share.
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/room.pbrt");
-    let loaded = load(&path, LoadOptions { resolution: Some([24, 18]), ..Default::default() }).unwrap();
-    let base = [("vpls", "256"), ("caches", "16"), ("subpixels", "4")];
+    let (loaded, base) = (small_room(), ROOM_BASE);
     let r = reference(&loaded, &base);
     assert_each_unbiased(
         &loaded,
@@ -351,18 +359,13 @@ fn draws_stratified_across_a_pixels_samples_stay_unbiased_and_narrow_the_spread(
 fn the_lobe_technique_is_unbiased_and_narrows_a_glossy_floors_spread() {
     // A metal floor of roughness 0.1: its lobe (about 24° wide) is wider than the split's 10° cones, so the
     // lobe technique G draws there, in proportion to flux among the VPL clusters the lobe's cone meets.
-    let loaded = loaded_text(&metal_floor(24, 0.1));
-    let base = [("vpls", "256"), ("caches", "12"), ("subpixels", "4")];
-    let r = reference(&loaded, &base);
-    assert_each_unbiased(
-        &loaded,
-        &base,
+    let (loaded, base) = unbiased_on_a_metal_floor(
+        0.1,
         &[
             [("placement", "vgc+dgs"), ("mis", "balance")],
             [("placement", "im"), ("mis", "alphamax")],
             [("placement", "sd+as"), ("distributions", "fcg")],
         ],
-        &r,
     );
     let ratio =
         spread_ratio(&loaded, &base, ("placement", "vgc+dgs"), ("distributions", "fubcg"), ("distributions", "fubc"));
@@ -375,9 +378,8 @@ fn shadow_rays_shared_in_runs_keep_the_estimate_unbiased_and_trace_fewer_rays() 
     // A cache traces only the ends of a run of VPLs close together as it sees them (`visangle`); at 45° the
     // runs are long and straddle the room's occluders, so some VPLs are taken as visible where they are
     // not. F is then a different density, but the one sampled: the estimate stays unbiased.
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/room.pbrt");
-    let loaded = load(&path, LoadOptions { resolution: Some([24, 18]), ..Default::default() }).unwrap();
-    let base = [("vpls", "256"), ("caches", "16"), ("subpixels", "4"), ("placement", "vgc+dgs")];
+    let loaded = small_room();
+    let base = [ROOM_BASE[0], ROOM_BASE[1], ROOM_BASE[2], ("placement", "vgc+dgs")];
     let r = reference(&loaded, &base);
     let rays = |angle: &str| {
         let mut set = base.to_vec();
