@@ -124,6 +124,14 @@ fn bar(show: bool, len: u64, what: &str) -> ProgressBar {
     b
 }
 
+/// The key of sub-pixel sample `i` of pixel (x, y), which its random stream is drawn from: the pixel's
+/// index times 64 plus `i` for the first 64 (the images made before more were allowed keep their bits), a
+/// hash of the three beyond (so that sample 64 of a pixel does not share the stream of sample 0 of the next).
+fn sample_key(x: i32, y: i32, i: u32) -> u64 {
+    let pixel = (y as u32 as u64) << 32 | x as u32 as u64;
+    if i < 64 { pixel.wrapping_mul(64).wrapping_add(i as u64) } else { hash3(SUBPIXEL_KEY, pixel, i as u64) | 1 << 63 }
+}
+
 /// The `i`-th of `n` sub-pixel offsets of pixel (x, y): one per cell of a (0,2)-net (a 2×2 stratification
 /// for n = 4), keyed only by the pixel.
 fn subpixel(x: i32, y: i32, i: u32) -> [f32; 2] {
@@ -275,7 +283,7 @@ fn shade_image<A: Application>(
             let (mut points, mut queries) = (Vec::new(), Vec::new());
             let mut lookup = GroupScratch::default();
             let y = b.min[1] + row as i32;
-            let key = |x: i32, i: u32| ((y as u32 as u64) << 32 | x as u32 as u64) * 64 + i as u64;
+            let key = |x: i32, i: u32| sample_key(x, y, i);
             for first in (0..w).step_by(GROUP_PIXELS) {
                 // The sub-pixel shading points of a run of pixels, looked up in the index as one group (the
                 // same selections as one lookup each, several times faster).
@@ -330,4 +338,23 @@ fn shade_image<A: Application>(
         rays.add(&r);
     }
     (img, rays)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sample_keys_are_distinct_across_neighbouring_pixels_and_many_samples() {
+        let mut keys = std::collections::HashSet::new();
+        for y in -2..3 {
+            for x in -2..3 {
+                for i in 0..1024 {
+                    assert!(keys.insert(sample_key(x, y, i)), "({x}, {y}) sample {i} repeats a key");
+                }
+            }
+        }
+        // The first 64 keep the old formula, so images with up to 64 sub-pixel samples keep their bits.
+        assert_eq!(sample_key(5, 7, 3), ((7u64 << 32) | 5) * 64 + 3);
+    }
 }
