@@ -121,11 +121,9 @@ fn meets(cone: &Cone, apex: Vec3A, center: Vec3A, radius: f32) -> bool {
     let sin_s = radius / d;
     let cos_s = (1.0 - sin_s * sin_s).max(0.0).sqrt();
     let sin_c = (1.0 - cone.cos * cone.cos).max(0.0).sqrt();
-    // cos(angle + spread); past π every direction is within reach.
+    // cos(angle + spread): both are at most π/2 (`lobecone` ≤ 90°), so their sum is at most π, where the
+    // cosine still falls monotonically.
     let cos_sum = cone.cos * cos_s - sin_c * sin_s;
-    if cone.angle + sin_s.asin() >= std::f32::consts::PI {
-        return true;
-    }
     cos_to >= cos_sum
 }
 
