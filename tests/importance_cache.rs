@@ -100,8 +100,8 @@ fn worst_z(loaded: &LoadedScene, set: &[(&str, &str)], reference: &[f64; 4]) -> 
     if z <= 3.0 {
         return z;
     }
-    // This file checks 28 settings of 4 quadrants each: unbiased estimators land beyond 3 standard errors
-    // in one of them with a probability of about 1 − 0.9973^112 ≈ 26 % (it happened once: `u` alone on the
+    // This file checks 31 settings of 4 quadrants each: unbiased estimators land beyond 3 standard errors
+    // in one of them with a probability of about 1 − 0.9973^124 ≈ 29 % (it happened once: `u` alone on the
     // open corner, 3.27 with seeds 100–163, 1.25 at most over 1024 seeds). A setting with a quadrant beyond
     // 3 is checked again over RETEST fresh seeds, where a real bias shows twice as many standard errors and
     // a chance excursion does not come back; the bar, 3 standard errors, stays.
