@@ -106,8 +106,13 @@ mod tests {
 
     #[test]
     fn out_of_range_arguments_are_clamped_not_panicking() {
-        let s = Stratum::new(0, 0, 9, 0);
-        let _ = s.draw(0, 5, 0);
+        // No sample count is a sample alone; an index past the count is the last sample.
+        assert_eq!(Stratum::new(0, 0, 9, 0), Stratum::alone(0, 0));
+        assert_eq!(Stratum::new(0, 0, 9, 4), Stratum::new(0, 0, 3, 4));
+        // No draw count is one draw; a draw past the count is the last draw.
+        let s = Stratum::new(2, 5, 1, 4);
+        assert_eq!(s.draw(7, 5, 0), s.draw(7, 0, 1));
+        assert_eq!(s.draw(7, 9, 3), s.draw(7, 2, 3));
         let _ = Stratum::alone(0, 0).draw(u64::MAX, u32::MAX, u32::MAX);
     }
 }
