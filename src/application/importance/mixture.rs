@@ -7,7 +7,8 @@
 //! largest n_t·p_t(j) takes the draw, weighted 1 / (n_t·p_t(j))).
 //!
 //! A fifth technique, G ([`super::lobe`]), joins the combination at shading points whose glossy lobe is in
-//! its range: it draws in proportion to flux among the VPL clusters the lobe's cone meets.
+//! its range: it draws among the VPLs in the lobe's cone, in proportion to flux over clamped squared
+//! distance.
 //!
 //! A technique none of the selected caches can draw from (every one of its distributions is 0), or G where
 //! the shading point has no lobe for it, draws no sample and has density 0 in the combination
@@ -103,11 +104,12 @@ where
         sum / self.counts[t] as f32
     }
 
-    /// A draw of technique `t`: a cache chosen uniformly among those that can draw (with `rng`), then a VPL
-    /// from its distribution at 64 uniform bits `u` (C: the VPL at `u` directly; G: the lobe's VPL at `u`),
-    /// or, when `u` is `None`, at bits drawn from `rng`; `None` for an inactive technique.
+    /// Draw `d` of technique `t`: a cache chosen uniformly among those that can draw (with `rng`), then a
+    /// VPL from its distribution at 64 uniform bits `u` (C: the VPL at `u` directly), or, when `u` is
+    /// `None`, at bits drawn from `rng`; for G the VPL its draw `d` chose when the lobe was made (from the
+    /// bits it was given); `None` for an inactive technique.
     #[inline]
-    pub fn sample(&self, t: usize, u: Option<u64>, rng: &mut Rng) -> Option<usize> {
+    pub fn sample(&self, t: usize, d: u32, u: Option<u64>, rng: &mut Rng) -> Option<usize> {
         if !self.active(t) {
             return None;
         }
@@ -118,7 +120,7 @@ where
             });
         }
         if let (LOBE, Some(lobe)) = (t, &self.lobe) {
-            return Some(lobe.sample(u.unwrap_or_else(|| rng.next_u64())));
+            return Some(lobe.pick(d));
         }
         let k = rng.below(self.counts[t]) as usize;
         let q = self.caches.clone().filter_map(|d| d[t].as_ref()).nth(k)?;
@@ -213,7 +215,7 @@ mod tests {
             let n = 200_000;
             let mut hits = [0u32; 6];
             for _ in 0..n {
-                hits[m.sample(t, None, &mut rng).unwrap()] += 1;
+                hits[m.sample(t, 0, None, &mut rng).unwrap()] += 1;
             }
             for (j, &h) in hits.iter().enumerate() {
                 let p = m.pdf(t, j) as f64;
@@ -229,7 +231,7 @@ mod tests {
             Box::leak(vec![[None, None, Quantised::new(&[1.0, 1.0])]].into_boxed_slice());
         let m = Mixture::new(only.iter(), [1; TECHNIQUES], 2, None);
         assert!(!m.active(0) && !m.active(1) && m.active(2) && m.active(3));
-        assert_eq!(m.sample(0, None, &mut Rng::new(1)), None);
+        assert_eq!(m.sample(0, 0, None, &mut Rng::new(1)), None);
         assert_eq!(m.pdf(1, 0), 0.0);
     }
 }

@@ -17,7 +17,7 @@
 //! Directly seen emitters add their radiance. The few VPLs a near-specular lobe singles out at a shading
 //! point, and those closer to it than d_c, are drawn apart there, in every sampling mode ([`sharp`],
 //! parameters `splitcone` and `splitnear`). A glossy lobe wider than that (up to `lobecone`) adds a fifth
-//! technique, G, drawing in proportion to flux among the VPL clusters its cone meets ([`lobe`]) — beyond
+//! technique, G, drawing among the VPLs in its cone by flux over clamped squared distance ([`lobe`]) — beyond
 //! ALGORITHMS.md §6.3's four, for the glossy receivers whose caches give their lobe's VPLs no density.
 //!
 //! `placement none` is the reference: the exact sum over every VPL with visibility at every sub-pixel
@@ -32,6 +32,7 @@ pub mod distribution;
 pub mod lobe;
 pub mod mixture;
 pub mod sharp;
+pub mod spheres;
 pub mod visibility;
 pub mod vpl;
 
@@ -48,7 +49,7 @@ use crate::shading::{Spectrum, luminance};
 
 use super::{Application, Baseline, Neighbour, PerSample};
 use distribution::Quantised;
-use lobe::Clusters;
+use lobe::LobeTree;
 use mixture::{LETTERS, LOBE, Mis, Mixture, TECHNIQUES};
 use sharp::Split;
 use vpl::{Receiver, Vpls};
@@ -60,7 +61,7 @@ const STAGE_VPLS: u64 = 0x7670_6c73;
 const STREAM_BASELINE: u64 = 16;
 
 /// Most draws one technique may make per sample (letters repeated in `distributions`).
-const MAX_TECHNIQUE_DRAWS: u32 = 16;
+const MAX_TECHNIQUE_DRAWS: u32 = lobe::MAX_DRAWS as u32;
 
 /// Most VPLs a render may ask for (beyond the memory check).
 const MAX_VPLS: i64 = 1 << 26;
@@ -139,8 +140,8 @@ pub struct Lit<'s> {
     flux_cdf: Vec<f64>,
     /// The split: near VPLs and near-specular lobes.
     split: Split,
-    /// The VPL clusters of the lobe technique G.
-    lobes: Clusters,
+    /// The VPL tree of the lobe technique G.
+    lobes: LobeTree,
 }
 
 impl Lit<'_> {
@@ -230,7 +231,12 @@ impl ImportanceCache {
     fn bounded(&self, cx: &Lit<'_>, at: &ShadingPoint, region: f32) -> Option<Quantised> {
         let x = cx.receiver(at)?;
         let mut w: Vec<f32> = (0..cx.vpls.len()).map(|j| cx.vpls.bound(&cx.shading, j, &x, region)).collect();
-        cx.split.at(&x).for_each(&cx.vpls, |j| w[j] = 0.0);
+        let local = cx.split.at(&x);
+        local.for_each(&cx.vpls, |j| {
+            if local.holds_throughout(&cx.vpls, j, region) {
+                w[j] = 0.0
+            }
+        });
         Quantised::new(&w)
     }
 }
@@ -299,7 +305,7 @@ impl Application for ImportanceCache {
             "float",
             "45",
             "degrees: the widest glossy lobe (wider than splitcone) for which the lobe technique g draws a VPL \
-             in proportion to flux among the VPL clusters its cone meets",
+             among those in its cone, in proportion to flux over clamped squared distance",
         ),
         Parameter::new(
             "stratify",
@@ -444,7 +450,7 @@ impl Application for ImportanceCache {
             })
             .collect();
         let split = Split::new(&vpls, self.split_cone.to_radians(), self.split_near * vpls.clamp2.sqrt());
-        let lobes = Clusters::new(&vpls, self.split_cone.to_radians(), self.lobe_cone.to_radians());
+        let lobes = LobeTree::new(&vpls, self.split_cone.to_radians(), self.lobe_cone.to_radians());
         Ok(Lit { scene, shading, vpls, flux_cdf, split, lobes })
     }
 
@@ -588,7 +594,16 @@ impl Application for ImportanceCache {
     ) -> [f32; 3] {
         let mut l = cx.emitted(s);
         if let Some(x) = cx.receiver(s) {
-            let lobe = if self.techniques[LOBE] > 0 { cx.lobes.at(&x) } else { None };
+            let lobe = match self.techniques[LOBE] {
+                0 => None,
+                m => {
+                    let mut us = [0u64; lobe::MAX_DRAWS];
+                    for (d, u) in us.iter_mut().enumerate().take(m as usize) {
+                        *u = if self.stratify { stratum.draw(LOBE as u64, d as u32, m) } else { rng.next_u64() };
+                    }
+                    cx.lobes.at(&cx.vpls, &x, &us[..m as usize])
+                }
+            };
             let mix = Mixture::new(near.iter().map(|c| &c.record.dists), self.techniques, cx.vpls.len(), lobe);
             let split = cx.split.at(&x);
             l += split.estimate(cx.scene, &cx.shading, &cx.vpls, &x, self.baseline_draws(), rng, rays);
@@ -596,7 +611,7 @@ impl Application for ImportanceCache {
                 let m = mix.draws(t);
                 for d in 0..m {
                     let u = self.stratify.then(|| stratum.draw(t as u64, d, m));
-                    let Some(j) = mix.sample(t, u, rng) else { break };
+                    let Some(j) = mix.sample(t, d, u, rng) else { continue };
                     let factor = mix.factor(t, j, self.mis);
                     if factor > 0.0 && !split.holds(&cx.vpls, j) {
                         l += cx.contribution(j, &x, rays) * factor;

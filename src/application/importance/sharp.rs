@@ -37,6 +37,7 @@
 
 use glam::Vec3A;
 
+use super::spheres::SphereTree;
 use super::vpl::{Emitter, Receiver, Vpls};
 use crate::render::lighting::Shading;
 use crate::sampling::Rng;
@@ -53,9 +54,6 @@ pub const D_MIN: f32 = 1.0;
 /// Members with light whose values [`Local::estimate`] keeps from its first walk over the set.
 const KEPT: usize = 16;
 
-/// VPLs per leaf of the query tree.
-const LEAF: usize = 8;
-
 /// A cone of unit directions around `axis` with half-angle `angle`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Cone {
@@ -63,15 +61,41 @@ pub struct Cone {
     pub axis: Vec3A,
     /// cos of the half-angle.
     pub cos: f32,
+    /// sin of the half-angle.
+    pub sin: f32,
     /// The half-angle, radians.
     pub angle: f32,
 }
 
 impl Cone {
+    /// The cone around unit `axis` with half-angle `angle` radians.
+    pub fn new(axis: Vec3A, angle: f32) -> Cone {
+        Cone { axis, cos: angle.cos(), sin: angle.sin(), angle }
+    }
+
     /// Whether unit direction `w` lies inside.
     #[inline]
     pub fn contains(&self, w: Vec3A) -> bool {
         w.dot(self.axis) >= self.cos
+    }
+
+    /// Whether a sphere may hold a point whose direction from `apex` lies in the cone (conservative): the
+    /// angle between the axis and the sphere's centre is at most the half-angle plus the angle the sphere
+    /// subtends, compared as cosines (no trigonometric calls). The half-angle must be at most π/2, so that
+    /// the sum stays within [0, π], where the cosine falls monotonically.
+    #[inline]
+    pub fn meets_sphere(&self, apex: Vec3A, center: Vec3A, radius: f32) -> bool {
+        let v = center - apex;
+        let d2 = v.length_squared();
+        if d2 <= radius * radius {
+            return true;
+        }
+        // cos(to) ≥ cos(half-angle + spread), with cos(to) = v·axis / d, sin(spread) = r / d and
+        // cos(spread) = √(d² − r²) / d, multiplied through by d: one square root, no division.
+        let along = v.dot(self.axis);
+        let (a, b) = (self.cos * (d2 - radius * radius).sqrt(), self.sin * radius);
+        // A little slack for rounding, relative to the terms' size: culling must never drop a member.
+        along >= a - b - 1e-5 * (along.abs() + a.abs() + b)
     }
 }
 
@@ -79,13 +103,31 @@ impl Cone {
 /// (D = 1 / (π α² (1 + tan²θ_h/α²)²), its cos⁴θ_h left out), with α the larger of the two; `None` when the
 /// lobe is not a microfacet reflection or its peak 1 / (π α_x α_y) does not exceed `D_MIN`.
 fn lobe_tan(b: &Bxdf) -> Option<f32> {
+    lobe_tan_alpha(b).map(|(t, _)| t)
+}
+
+/// [`lobe_tan`] and the α it was computed with.
+fn lobe_tan_alpha(b: &Bxdf) -> Option<(f32, f32)> {
     let d = match b {
         Bxdf::MicrofacetReflection(m) => &m.distribution,
         Bxdf::FresnelBlend(m) => &m.distribution,
         _ => return None,
     };
     let peak = 1.0 / (std::f32::consts::PI * d.alpha_x * d.alpha_y);
-    (peak > D_MIN && peak.is_finite()).then(|| d.alpha_x.max(d.alpha_y) * ((peak / D_MIN).sqrt() - 1.0).sqrt())
+    let alpha = d.alpha_x.max(d.alpha_y);
+    (peak > D_MIN && peak.is_finite()).then(|| (alpha * ((peak / D_MIN).sqrt() - 1.0).sqrt(), alpha))
+}
+
+/// The widest sharp lobe's α (the larger of its two) with [`sharp_cone`]'s cone: `None` where that is.
+pub fn sharp_lobe(bsdf: &Bsdf, wo: Vec3A, max_angle: f32) -> Option<(Cone, f32)> {
+    let cone = sharp_cone(bsdf, wo, max_angle)?;
+    let alpha = bsdf
+        .lobes()
+        .filter(|(_, s)| s.max_element() > 0.0)
+        .filter_map(|(b, _)| lobe_tan_alpha(b))
+        .reduce(|a, b| if b.0 > a.0 { b } else { a })?
+        .1;
+    Some((cone, alpha))
 }
 
 /// The cone holding every direction ω in which a sharp reflection lobe of `bsdf`, seen from `wo`, has a
@@ -100,18 +142,7 @@ pub fn sharp_cone(bsdf: &Bsdf, wo: Vec3A, max_angle: f32) -> Option<Cone> {
     }
     let n = bsdf.shading_normal();
     let axis = (2.0 * wo.dot(n) * n - wo).normalize();
-    axis.is_finite().then(|| Cone { axis, cos: angle.cos(), angle })
-}
-
-/// A node of the query tree: a bounding sphere of VPLs `lo..hi` (in the VPL list's Morton order);
-/// the nodes are stored in preorder and `skip` is the index past this node's subtree.
-#[derive(Clone, Copy, Debug)]
-struct Node {
-    center: Vec3A,
-    radius: f32,
-    lo: u32,
-    hi: u32,
-    skip: u32,
+    axis.is_finite().then(|| Cone::new(axis, angle))
 }
 
 /// A uniform grid over the positional VPLs: cell (x, y, z) holds `members[start[c]..start[c + 1]]` with
@@ -217,7 +248,7 @@ pub struct Split {
     near: f32,
     /// Positional VPLs are `0..positional`, directional ones after them.
     positional: usize,
-    nodes: Vec<Node>,
+    tree: SphereTree,
     /// The positional VPLs bucketed by a uniform grid of cells at least 2·`near` wide, for the ball query
     /// alone (the common case: a shading point without a sharp lobe).
     grid: Grid,
@@ -246,7 +277,7 @@ impl Split {
         }
         let positional = vpls.list.iter().take_while(|v| !matches!(v.emitter, Emitter::Directional)).count();
         let mut split = Split { max_angle, near, positional, beam_of: vec![u32::MAX; vpls.len()], ..Split::default() };
-        split.build(vpls, 0, positional);
+        split.tree = SphereTree::new(vpls, positional);
         if near > 0.0 {
             split.grid = Grid::new(vpls, positional, near);
         }
@@ -274,28 +305,6 @@ impl Split {
     /// VPLs with a sharp lobe (a beam).
     pub fn beam_count(&self) -> usize {
         self.beams.len()
-    }
-
-    fn build(&mut self, vpls: &Vpls, lo: usize, hi: usize) {
-        if lo >= hi {
-            return;
-        }
-        let (mut min, mut max) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
-        for v in &vpls.list[lo..hi] {
-            (min, max) = (min.min(v.p), max.max(v.p));
-        }
-        let center = 0.5 * (min + max);
-        let radius = vpls.list[lo..hi].iter().map(|v| (v.p - center).length()).fold(0.0f32, f32::max);
-        // Rounding of the query's distances: the sphere is grown so that culling never drops a member.
-        let radius = radius * (1.0 + 1e-4) + 1e-6 * center.abs().max_element().max(1.0);
-        let at = self.nodes.len();
-        self.nodes.push(Node { center, radius, lo: lo as u32, hi: hi as u32, skip: 0 });
-        if hi - lo > LEAF {
-            let mid = lo + (hi - lo) / 2;
-            self.build(vpls, lo, mid);
-            self.build(vpls, mid, hi);
-        }
-        self.nodes[at].skip = self.nodes.len() as u32;
     }
 
     /// The split at receiver `x`.
@@ -327,6 +336,21 @@ impl Local<'_> {
             Some(&b) if b != u32::MAX => self.in_beam(b as usize),
             _ => false,
         }
+    }
+
+    /// Whether member `j` of S(s) is a member of S(s') for every s' within `region` of the apex, as far as
+    /// the ball goes: true when it lies within `near` − `region` of the apex, or when the cone or a beam
+    /// holds it (taken as held throughout). B, a bound over the region a cache serves, leaves out only these
+    /// of its cache's split: a VPL near the cache but farther than `near` from some point of its region
+    /// would otherwise have no density from the cache at that point.
+    pub fn holds_throughout(&self, vpls: &Vpls, j: usize, region: f32) -> bool {
+        let sp = self.split;
+        let beam = matches!(sp.beam_of.get(j), Some(&b) if b != u32::MAX && self.in_beam(b as usize));
+        if beam || self.cone.is_some_and(|c| self.in_cone(vpls, &c, j)) {
+            return true;
+        }
+        let r = sp.near - region;
+        r > 0.0 && j < sp.positional && (vpls.list[j].p - self.apex).length_squared() < r * r
     }
 
     /// Whether positional VPL `j` lies within the split's `near` distance of the apex.
@@ -392,24 +416,19 @@ impl Local<'_> {
     fn for_each_tree(&self, vpls: &Vpls, mut f: impl FnMut(usize)) {
         let sp = self.split;
         if self.cone.is_some() || sp.near > 0.0 {
-            let mut i = 0;
-            while i < sp.nodes.len() {
-                let n = &sp.nodes[i];
-                let meets_ball =
-                    sp.near > 0.0 && (n.center - self.apex).length_squared() <= (n.radius + sp.near).powi(2);
-                if !meets_ball && !self.cone.is_some_and(|c| self.sphere_meets(&c, n.center, n.radius)) {
-                    i = n.skip as usize;
-                    continue;
-                }
-                if n.hi - n.lo <= LEAF as u32 {
-                    for j in n.lo as usize..n.hi as usize {
+            sp.tree.walk(
+                |center, radius| {
+                    (sp.near > 0.0 && (center - self.apex).length_squared() <= (radius + sp.near).powi(2))
+                        || self.cone.is_some_and(|c| c.meets_sphere(self.apex, center, radius))
+                },
+                |lo, hi| {
+                    for j in lo..hi {
                         if self.in_ball(vpls, j) || self.cone.is_some_and(|c| self.in_cone(vpls, &c, j)) {
                             f(j);
                         }
                     }
-                }
-                i += 1;
-            }
+                },
+            );
         }
         if let Some(cone) = &self.cone {
             for j in sp.positional..vpls.len() {
@@ -429,19 +448,6 @@ impl Local<'_> {
                 f(j);
             }
         }
-    }
-
-    /// Whether a sphere may hold a point whose direction from the apex is in the cone (conservative).
-    #[inline]
-    fn sphere_meets(&self, cone: &Cone, center: Vec3A, radius: f32) -> bool {
-        let v = center - self.apex;
-        let d = v.length();
-        if d <= radius {
-            return true;
-        }
-        let to_center = (v.dot(cone.axis) / d).clamp(-1.0, 1.0).acos();
-        let spread = (radius / d).min(1.0).asin();
-        to_center <= cone.angle + spread + 1e-3
     }
 
     /// The split's part of the VPL sum at `x`, Σ_{j∈S(s)} I_j(x), estimated with at most `draws` shadow
@@ -521,23 +527,27 @@ impl Local<'_> {
     }
 }
 
+/// Test set-up: a BSDF of one Trowbridge–Reitz reflection lobe of roughness `alpha` (no Fresnel) about the
+/// normal `n`.
+#[cfg(test)]
+pub(crate) fn glossy(alpha: f32, n: Vec3A) -> Bsdf {
+    use crate::shading::bxdf::distribution::TrowbridgeReitz;
+    use crate::shading::bxdf::fresnel::Fresnel;
+    use crate::shading::bxdf::microfacet::MicrofacetReflection;
+    let mut bsdf = Bsdf::new(n, n, n.any_orthonormal_vector(), 1.0);
+    bsdf.add(Bxdf::MicrofacetReflection(MicrofacetReflection {
+        r: Spectrum::splat(1.0),
+        distribution: TrowbridgeReitz::new(alpha, alpha),
+        fresnel: Fresnel::NoOp,
+    }));
+    bsdf
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::vpl::{GeneralVpl, Vpl};
     use super::*;
     use crate::shading::bxdf::distribution::TrowbridgeReitz;
-    use crate::shading::bxdf::fresnel::Fresnel;
-    use crate::shading::bxdf::microfacet::MicrofacetReflection;
-
-    fn glossy(alpha: f32, n: Vec3A) -> Bsdf {
-        let mut bsdf = Bsdf::new(n, n, n.any_orthonormal_vector(), 1.0);
-        bsdf.add(Bxdf::MicrofacetReflection(MicrofacetReflection {
-            r: Spectrum::splat(1.0),
-            distribution: TrowbridgeReitz::new(alpha, alpha),
-            fresnel: Fresnel::NoOp,
-        }));
-        bsdf
-    }
 
     #[test]
     fn outside_the_cone_the_lobe_is_below_the_density_threshold() {
@@ -600,6 +610,32 @@ mod tests {
     }
 
     #[test]
+    fn b_leaves_out_only_the_members_held_throughout_the_region() {
+        let mut v = Vpls::none(0.01);
+        let at = |x: f32| Vpl {
+            p: Vec3A::new(x, 0.0, 0.0),
+            p_error: Vec3A::ZERO,
+            ng: Vec3A::Z,
+            ns: Vec3A::Z,
+            power: Spectrum::splat(1.0),
+            emitter: Emitter::Cosine { two_sided: false },
+        };
+        v.list.extend([at(0.5), at(0.9), at(3.0)]);
+        let split = Split::new(&v, 0.5, 1.0);
+        let ball = Local { split: &split, apex: Vec3A::ZERO, cone: None };
+        let mut members = Vec::new();
+        ball.for_each(&v, |j| members.push(j));
+        assert_eq!(members, [0, 1], "the ball of radius 1");
+        // Within 1 − 0.3 of the apex: in every ball of a point within 0.3 of it; 0.9 is not.
+        assert!(ball.holds_throughout(&v, 0, 0.3));
+        assert!(!ball.holds_throughout(&v, 1, 0.3));
+        assert!(!ball.holds_throughout(&v, 0, 0.6), "0.5 is beyond 1 − 0.6");
+        // A cone's member is taken as held throughout, however far.
+        let cone = Local { split: &split, apex: Vec3A::ZERO, cone: Some(Cone::new(Vec3A::X, 0.2)) };
+        assert!(cone.holds(&v, 2) && cone.holds_throughout(&v, 2, 0.6));
+    }
+
+    #[test]
     fn the_tree_query_finds_exactly_the_members_once() {
         let mut rng = Rng::new(17);
         let v = vpls(&mut rng);
@@ -613,7 +649,7 @@ mod tests {
                 let apex = Vec3A::new(4.0 * rng.uniform() - 2.0, 4.0 * rng.uniform() - 2.0, 2.0 * rng.uniform() - 0.5);
                 let axis = crate::sampling::warp::uniform_sphere(rng.uniform2());
                 let half = 0.01 + 0.4 * rng.uniform();
-                let cone = (k % 5 != 0 && angle > 0.0).then_some(Cone { axis, cos: half.cos(), angle: half });
+                let cone = (k % 5 != 0 && angle > 0.0).then_some(Cone::new(axis, half));
                 let local = Local { split: &split, apex, cone };
                 let mut found = Vec::new();
                 local.for_each(&v, |j| found.push(j));
