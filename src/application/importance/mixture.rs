@@ -7,8 +7,8 @@
 //! largest n_t·p_t(j) takes the draw, weighted 1 / (n_t·p_t(j))).
 //!
 //! A fifth technique, G ([`super::lobe`]), joins the combination at shading points whose glossy lobe is in
-//! its range: it draws among the VPLs in the lobe's cone, in proportion to flux over clamped squared
-//! distance.
+//! its range: it draws among the VPLs in the lobe's cone, by flux times the lobe's falloff over clamped
+//! squared distance.
 //!
 //! A technique none of the selected caches can draw from (every one of its distributions is 0), or G where
 //! the shading point has no lobe for it, draws no sample and has density 0 in the combination

@@ -17,8 +17,9 @@
 //! Directly seen emitters add their radiance. The few VPLs a near-specular lobe singles out at a shading
 //! point, and those closer to it than d_c, are drawn apart there, in every sampling mode ([`sharp`],
 //! parameters `splitcone` and `splitnear`). A glossy lobe wider than that (up to `lobecone`) adds a fifth
-//! technique, G, drawing among the VPLs in its cone by flux over clamped squared distance ([`lobe`]) — beyond
-//! ALGORITHMS.md §6.3's four, for the glossy receivers whose caches give their lobe's VPLs no density.
+//! technique, G, drawing among the VPLs in its cone by flux, the lobe's falloff and clamped squared distance
+//! ([`lobe`]) — beyond ALGORITHMS.md §6.3's four, for the glossy receivers whose caches give their lobe's
+//! VPLs no density.
 //!
 //! `placement none` is the reference: the exact sum over every VPL with visibility at every sub-pixel
 //! sample — the noise-free many-light image the cached estimator is unbiased for (same VPLs, same clamp).
@@ -305,7 +306,7 @@ impl Application for ImportanceCache {
             "float",
             "45",
             "degrees: the widest glossy lobe (wider than splitcone) for which the lobe technique g draws a VPL \
-             among those in its cone, in proportion to flux over clamped squared distance",
+             among those in its cone, by flux times the lobe's falloff over clamped squared distance",
         ),
         Parameter::new(
             "stratify",
