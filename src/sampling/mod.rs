@@ -12,5 +12,5 @@ pub mod stratum;
 pub mod warp;
 
 pub use frame::Frame;
-pub use rng::{Rng, hash3};
+pub use rng::{Rng, hash3, unit_f64};
 pub use stratum::Stratum;

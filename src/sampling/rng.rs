@@ -27,6 +27,12 @@ const PCG_MULT: u64 = 0x5851_f42d_4c95_7f2d;
 /// The largest f32 below 1; uniform floats are clamped to it so they stay in [0, 1).
 pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
+/// 64 uniform bits as a number in [0, 1): their top 53 bits over 2⁵³ (every f64 of that grid exactly).
+#[inline]
+pub fn unit_f64(u: u64) -> f64 {
+    (u >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+}
+
 impl Rng {
     /// A stream for `key` (use [`hash3`] to build keys); `key` selects both start state and sequence.
     pub fn new(key: u64) -> Self {

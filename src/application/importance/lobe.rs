@@ -41,6 +41,7 @@ use super::sharp::sharp_cone;
 use super::sharp::{Cone, sharp_lobe};
 use super::spheres::SphereTree;
 use super::vpl::{Emitter, Receiver, Vpls};
+use crate::sampling::unit_f64;
 
 /// Most draws of G per shading point (the letters of `distributions` allow 16).
 pub const MAX_DRAWS: usize = 16;
@@ -87,7 +88,7 @@ impl LobeTree {
         let inv_alpha2 = 1.0 / (alpha * alpha);
         let mut lobe = Lobe { tree: self, vpls, apex: x.si.p, cone, inv_alpha2, total: 0.0, picks: [0; MAX_DRAWS] };
         let us = &us[..us.len().min(MAX_DRAWS)];
-        let mut u: [f64; MAX_DRAWS] = std::array::from_fn(|k| us.get(k).map_or(0.0, |&u| unit(u)));
+        let mut u: [f64; MAX_DRAWS] = std::array::from_fn(|k| us.get(k).map_or(0.0, |&u| unit_f64(u)));
         let mut leaf = [(0u32, 0u32, 0.0f64); MAX_DRAWS];
         let mut total = 0.0f64;
         self.tree.walk(
@@ -134,12 +135,6 @@ impl LobeTree {
 
 /// The largest f64 below 1.
 const ONE_BELOW: f64 = 1.0 - f64::EPSILON / 2.0;
-
-/// 64 uniform bits as a number in [0, 1).
-#[inline]
-fn unit(u: u64) -> f64 {
-    (u >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-}
 
 /// G at one shading point: its lobe's cone and the sum of the weights in it.
 #[derive(Clone, Copy, Debug)]

@@ -172,7 +172,7 @@ impl Lit<'_> {
         if total.is_nan() || total <= 0.0 {
             return None;
         }
-        let target = (u >> 11) as f64 * (1.0 / (1u64 << 53) as f64) * total;
+        let target = crate::sampling::unit_f64(u) * total;
         let j = self.flux_cdf.partition_point(|&c| c <= target).min(self.flux_cdf.len() - 1);
         let p = (self.flux_cdf[j] - if j == 0 { 0.0 } else { self.flux_cdf[j - 1] }) / total;
         (p > 0.0).then_some((j, p))

@@ -102,12 +102,8 @@ impl Cone {
 /// tan of the half-vector angle within which a lobe's Trowbridge–Reitz density exceeds [`D_MIN`]
 /// (D = 1 / (π α² (1 + tan²θ_h/α²)²), its cos⁴θ_h left out), with α the larger of the two; `None` when the
 /// lobe is not a microfacet reflection or its peak 1 / (π α_x α_y) does not exceed `D_MIN`.
-fn lobe_tan(b: &Bxdf) -> Option<f32> {
-    lobe_tan_alpha(b).map(|(t, _)| t)
-}
-
-/// [`lobe_tan`] and the α it was computed with.
-fn lobe_tan_alpha(b: &Bxdf) -> Option<(f32, f32)> {
+/// Also returned: that α.
+fn lobe_tan(b: &Bxdf) -> Option<(f32, f32)> {
     let d = match b {
         Bxdf::MicrofacetReflection(m) => &m.distribution,
         Bxdf::FresnelBlend(m) => &m.distribution,
@@ -118,31 +114,28 @@ fn lobe_tan_alpha(b: &Bxdf) -> Option<(f32, f32)> {
     (peak > D_MIN && peak.is_finite()).then(|| (alpha * ((peak / D_MIN).sqrt() - 1.0).sqrt(), alpha))
 }
 
-/// The widest sharp lobe's α (the larger of its two) with [`sharp_cone`]'s cone: `None` where that is.
-pub fn sharp_lobe(bsdf: &Bsdf, wo: Vec3A, max_angle: f32) -> Option<(Cone, f32)> {
-    let cone = sharp_cone(bsdf, wo, max_angle)?;
-    let alpha = bsdf
-        .lobes()
-        .filter(|(_, s)| s.max_element() > 0.0)
-        .filter_map(|(b, _)| lobe_tan_alpha(b))
-        .reduce(|a, b| if b.0 > a.0 { b } else { a })?
-        .1;
-    Some((cone, alpha))
-}
-
 /// The cone holding every direction ω in which a sharp reflection lobe of `bsdf`, seen from `wo`, has a
 /// density above [`D_MIN`]: around the mirror direction of `wo` about the shading normal, twice the lobe's
 /// half-vector angle wide (reflecting about a half vector θ_h away from the normal turns ω by at most 2θ_h).
 /// `None` when no lobe is that sharp or the cone would be wider than `max_angle` radians.
 pub fn sharp_cone(bsdf: &Bsdf, wo: Vec3A, max_angle: f32) -> Option<Cone> {
-    let t = bsdf.lobes().filter(|(_, s)| s.max_element() > 0.0).filter_map(|(b, _)| lobe_tan(b)).reduce(f32::max)?;
+    sharp_lobe(bsdf, wo, max_angle).map(|(cone, _)| cone)
+}
+
+/// [`sharp_cone`]'s cone with the α (the larger of its two) of the widest sharp lobe, the one that sets it.
+pub fn sharp_lobe(bsdf: &Bsdf, wo: Vec3A, max_angle: f32) -> Option<(Cone, f32)> {
+    let (t, alpha) = bsdf
+        .lobes()
+        .filter(|(_, s)| s.max_element() > 0.0)
+        .filter_map(|(b, _)| lobe_tan(b))
+        .reduce(|a, b| if b.0 > a.0 { b } else { a })?;
     let angle = 2.0 * t.atan();
     if angle.is_nan() || angle > max_angle {
         return None;
     }
     let n = bsdf.shading_normal();
     let axis = (2.0 * wo.dot(n) * n - wo).normalize();
-    axis.is_finite().then(|| Cone::new(axis, angle))
+    axis.is_finite().then(|| (Cone::new(axis, angle), alpha))
 }
 
 /// A uniform grid over the positional VPLs: cell (x, y, z) holds `members[start[c]..start[c + 1]]` with
