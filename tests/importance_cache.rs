@@ -511,6 +511,9 @@ fn stats_report_the_records_and_geometry_free_dgs() {
     assert!(kept > 3000.0 && kept < 4000.0, "{kept}");
     assert_eq!(c.settings["vpls"], 1000);
     assert_eq!(c.settings["distributions"], "fubcg");
+    // Eight draws per letter by default; the baselines draw as many as F, U, B and C together.
+    assert_eq!(c.settings["lightsamples"], 8);
+    assert_eq!(c.settings["draws"], 32);
     // What the scene gave beside what was asked: every VPL here, from fewer light paths (a path leaves
     // several); making them is a stage of its own, inside the total.
     assert_eq!(c.stats.prepared["vpls_generated"], 1000);
@@ -544,6 +547,10 @@ fn bad_parameters_and_absurd_budgets_are_clear_errors() {
         ("vpls", "1000000000000", "between 1"),
         ("distributions", "fx", "letters"),
         ("distributions", "fffffffffffffffffu", "at most 16 times"),
+        // Each letter draws `lightsamples` (8) times: three f's would be 24 draws of F.
+        ("distributions", "fffu", "at most 16 times"),
+        ("lightsamples", "0", "between 1 and 16"),
+        ("lightsamples", "17", "between 1 and 16"),
         ("distributions", "", "at least one"),
         ("stratify", "maybe", "stratify"),
         ("mis", "max", "alphamax"),

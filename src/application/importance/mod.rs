@@ -6,10 +6,11 @@
 //! as the cache sees them share their shadow rays there ([`visibility`], parameter `visangle`; 0: one ray
 //! per VPL that could contribute, as in the paper) — and, once placement is over and the region the cache
 //! serves is known, an upper bound over that region (B); each is kept as a quantised distribution over the
-//! VPLs ([`distribution`], about one byte per VPL). A sub-pixel sample draws one VPL from each technique F,
-//! U, B and C (uniform over all VPLs; `distributions` may repeat a letter for more draws of it), each the
-//! mixture of its selected caches' distributions, and combines them by multiple importance sampling
-//! ([`mixture`]): the balance heuristic by default, α-max as an option. Every draw costs one shadow ray.
+//! VPLs ([`distribution`], about one byte per VPL). A sub-pixel sample draws `lightsamples` VPLs (default
+//! [`DEFAULT_LIGHT_SAMPLES`]; ALGORITHMS.md §6.3 and the paper: one) from each technique F, U, B and C
+//! (uniform over all VPLs; `distributions` may repeat a letter for more draws of it), each the mixture of
+//! its selected caches' distributions, and combines them by multiple importance sampling ([`mixture`]): the
+//! balance heuristic by default, α-max as an option. Every draw costs one shadow ray.
 //! The positions the draws take in the distributions are stratified across the pixel's sub-pixel samples
 //! ([`Stratum`], parameter `stratify`) — a choice beyond ALGORITHMS.md §6.3, which draws each sample
 //! independently: every draw alone is distributed as before, so the estimator is unchanged in expectation,
@@ -61,8 +62,18 @@ const STAGE_VPLS: u64 = 0x7670_6c73;
 /// Stratum stream of the baselines' draws (the techniques use their index, 0–4).
 const STREAM_BASELINE: u64 = 16;
 
-/// Most draws one technique may make per sample (letters repeated in `distributions`).
+/// Most draws one technique may make per sample (its letters in `distributions` times `lightsamples`).
 const MAX_TECHNIQUE_DRAWS: u32 = lobe::MAX_DRAWS as u32;
+
+/// Default of `lightsamples`: the draws each letter of `distributions` makes per sub-pixel sample.
+/// ALGORITHMS.md §6.3 (after the paper) draws one per technique, four light samples per shading point; we
+/// draw eight per technique. A shading point's fixed work (its camera ray, the search for its caches, the
+/// mixture, the split and G's walk) cost half to three quarters of the render stage at one draw per technique
+/// on the three 640×360 scenes of `results/importance/README.md`, so further draws come cheap, and, stratified
+/// across the pixel's samples, they lower the error faster than one over their count: error² × time fell
+/// 4.7–5.7× from one to eight draws per technique on each of the three, and 1.3–1.4× more from eight to
+/// sixteen, which doubles the time of an image (the table there).
+pub const DEFAULT_LIGHT_SAMPLES: u32 = 8;
 
 /// Most VPLs a render may ask for (beyond the memory check).
 const MAX_VPLS: i64 = 1 << 26;
@@ -100,8 +111,10 @@ pub struct ImportanceCache {
     /// d_c as a fraction of the scene's diagonal.
     pub clamp: f32,
     /// Samples each technique (F, U, B, C, G) draws per sub-pixel sample (0: not used; G only where the
-    /// shading point has a lobe in its range).
+    /// shading point has a lobe in its range): its letters in `distributions` times `light_samples`.
     pub techniques: [u32; TECHNIQUES],
+    /// Draws per letter of `distributions` (`lightsamples`).
+    pub light_samples: u32,
     /// How their samples are combined.
     pub mis: Mis,
     /// Caches, or a baseline without them.
@@ -186,9 +199,10 @@ impl ImportanceCache {
         if self.draws > 0 { self.draws } else { self.techniques[..LOBE].iter().sum() }
     }
 
-    /// The techniques as the letters of the `distributions` parameter (a letter per draw).
+    /// The techniques as the letters of the `distributions` parameter (a letter per `lightsamples` draws).
     fn letters(&self) -> String {
-        (0..TECHNIQUES).flat_map(|t| std::iter::repeat_n(LETTERS[t], self.techniques[t] as usize)).collect()
+        let per = self.light_samples.max(1);
+        (0..TECHNIQUES).flat_map(|t| std::iter::repeat_n(LETTERS[t], (self.techniques[t] / per) as usize)).collect()
     }
 
     /// The per-sample baselines: [`ImportanceCache::baseline_draws`] VPLs drawn uniformly or by flux,
@@ -265,7 +279,15 @@ impl Application for ImportanceCache {
             "distributions",
             "string",
             "fubcg",
-            "techniques that draw, a letter per draw: f full, u unoccluded, b bounded, c conservative, g lobe",
+            "techniques that draw, each letter lightsamples draws: f full, u unoccluded, b bounded, c \
+             conservative, g lobe",
+        ),
+        Parameter::new(
+            "lightsamples",
+            "integer",
+            "8",
+            "VPLs each letter of distributions draws per sub-pixel sample (the paper: 1, four light samples per \
+             shading point)",
         ),
         Parameter::new("mis", "string", "balance", "combination of the techniques: balance or alphamax"),
         Parameter::new(
@@ -278,7 +300,7 @@ impl Application for ImportanceCache {
             "draws",
             "integer",
             "0",
-            "VPLs the uniform and power baselines draw per sample (0: one per technique)",
+            "VPLs the uniform and power baselines draw per sample (0: as many as f, u, b and c draw together)",
         ),
         Parameter::new(
             "splitcone",
@@ -355,15 +377,24 @@ impl Application for ImportanceCache {
             return Err(bad("clamp", format!("must be a finite number ≥ 0, got {clamp}")));
         }
         let letters = p.string_or("distributions", "fubcg")?;
+        let light_samples = p.int_or("lightsamples", DEFAULT_LIGHT_SAMPLES as i64)?;
+        if !(1..=MAX_TECHNIQUE_DRAWS as i64).contains(&light_samples) {
+            return Err(bad(
+                "lightsamples",
+                format!("must be between 1 and {MAX_TECHNIQUE_DRAWS}, got {light_samples}"),
+            ));
+        }
+        let light_samples = light_samples as u32;
         let mut techniques = [0u32; TECHNIQUES];
         for ch in letters.chars() {
             match LETTERS.iter().position(|&l| l == ch.to_ascii_lowercase()) {
-                Some(t) if techniques[t] < MAX_TECHNIQUE_DRAWS => techniques[t] += 1,
+                Some(t) if techniques[t] + light_samples <= MAX_TECHNIQUE_DRAWS => techniques[t] += light_samples,
                 _ => {
                     return Err(bad(
                         "distributions",
                         format!(
-                            "must be letters of f, u, b, c, g, each at most {MAX_TECHNIQUE_DRAWS} times (e.g. \"fubcg\"), got \"{letters}\""
+                            "must be letters of f, u, b, c, g, each drawing at most {MAX_TECHNIQUE_DRAWS} times \
+                             (its count times lightsamples {light_samples}; e.g. \"fubcg\"), got \"{letters}\""
                         ),
                     ));
                 }
@@ -417,6 +448,7 @@ impl Application for ImportanceCache {
             vpl_seed: p.int_or("vplseed", 0)? as u64,
             clamp: clamp as f32,
             techniques,
+            light_samples,
             mis,
             sampling,
         })
@@ -462,6 +494,7 @@ impl Application for ImportanceCache {
             ("vplseed", self.vpl_seed.into()),
             ("clamp", serde_json::Number::from_f64(self.clamp as f64).map_or(serde_json::Value::Null, Into::into)),
             ("distributions", self.letters().into()),
+            ("lightsamples", self.light_samples.into()),
             ("mis", if self.mis == Mis::Balance { "balance" } else { "alphamax" }.into()),
             ("sampling", self.sampling.name().into()),
             ("draws", self.baseline_draws().into()),
@@ -668,6 +701,7 @@ mod tests {
             vpl_seed: 0,
             clamp: 0.025,
             techniques: [1, 1, 1, 1, 0],
+            light_samples: 1,
             lobe_cone: 45.0,
             mis: Mis::Balance,
             sampling: Sampling::Cache,
@@ -679,5 +713,11 @@ mod tests {
         };
         let total = 25_000 * app.record_bytes_bound();
         assert!(total <= 1_000_000_000, "{total}");
+    }
+
+    #[test]
+    fn the_parameter_table_gives_the_default_light_samples() {
+        let row = ImportanceCache::PARAMETERS.iter().find(|p| p.name == "lightsamples").unwrap();
+        assert_eq!(row.default, DEFAULT_LIGHT_SAMPLES.to_string());
     }
 }

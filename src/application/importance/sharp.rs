@@ -22,9 +22,10 @@
 //! of s, every VPL whose direction from s lies in the cone of s's sharp lobes ([`sharp_cone`]), and every
 //! VPL with a sharp lobe whose beam cone contains s. The VPL sum splits exactly: Σ_j I_j(s) = Σ_{j∈S(s)}
 //! I_j(s) + Σ_{j∉S(s)} I_j(s). The first part is estimated at s itself with as many shadow rays as the
-//! estimator draws VPLs (4 for importance caching, `draws` for the baselines): exactly when S(s) has no
-//! more members with light, else by that many members drawn systematically in proportion to their exact
-//! unoccluded contribution there, so only their visibility is left to chance; the second is the usual
+//! estimator draws VPLs (as many as F, U, B and C draw for importance caching, 32 by default; `draws` for
+//! the baselines): exactly when S(s) has no more members with light, else by that many members drawn
+//! systematically in proportion to their exact unoccluded contribution there, so only their visibility is
+//! left to chance; the second is the usual
 //! estimator with every draw that lands in S(s) counted as 0. (With one draw, as before, the split's
 //! variance was 36 % of the 640×360 bathroom's squared error at 2800 caches, seed 0; with four, 10 %, for
 //! 15 % more shadow rays.) S(s) depends on s alone, never on a draw, so both parts stay unbiased for their
