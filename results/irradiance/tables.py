@@ -7,7 +7,8 @@ rows = list(csv.DictReader(open(sys.argv[1])))
 g = defaultdict(list)
 order = []
 for r in rows:
-    if r["placement"] == "none": continue
+    # The reference, and the per-pixel baselines' rows (`power:N`, one seed, no caches: equal_time.py's).
+    if r["placement"] == "none" or int(r["caches"]) == 0: continue
     k = (r["scene"], int(r["caches"]), r["placement"])
     if k not in g: order.append(k)
     g[k].append(r)

@@ -222,6 +222,34 @@ pub(crate) fn tick(v: f64) -> String {
     if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
 }
 
+/// Ticks of a logarithmic axis over [lo, hi]: the labelled ones (1, 2 and 5 times a power of ten, or every
+/// multiple 1–9 when fewer than four of those fall in the range) and the grid lines (every multiple 1–9).
+/// plotters' own log axis labels only from the first power of ten inside the range, which left an error
+/// axis spanning 0.04–1.2 with no label under the importance-caching points at 0.05–0.06.
+fn log_ticks(lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
+    let (mut labelled, mut grid) = (Vec::new(), Vec::new());
+    if !(lo > 0.0 && hi > lo && hi.is_finite()) {
+        return (labelled, grid);
+    }
+    let mut e = lo.log10().floor() as i32;
+    while 10f64.powi(e) <= hi {
+        for m in 1..=9 {
+            let v = m as f64 * 10f64.powi(e);
+            if (lo..=hi).contains(&v) {
+                grid.push(v);
+                if matches!(m, 1 | 2 | 5) {
+                    labelled.push(v);
+                }
+            }
+        }
+        e += 1;
+    }
+    if labelled.len() < 4 {
+        labelled = grid.clone();
+    }
+    (labelled, grid)
+}
+
 /// Draws the two panels of `plot` on `root`.
 fn draw<DB: DrawingBackend>(plot: &Plot, root: &DrawingArea<DB, Shift>) -> std::result::Result<(), String> {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
@@ -276,11 +304,13 @@ fn draw<DB: DrawingBackend>(plot: &Plot, root: &DrawingArea<DB, Shift>) -> std::
                     .map_err(e)?;
             }};
         }
+        let (labelled, grid) = log_ticks(lo, hi);
+        let y = (lo..hi).log_scale().with_key_points(labelled).with_light_points(grid);
         if plot.log_x {
-            body!(builder.build_cartesian_2d((x_lo.max(1e-3) * 0.8..x_hi * 1.25).log_scale(), (lo..hi).log_scale()));
+            body!(builder.build_cartesian_2d((x_lo.max(1e-3) * 0.8..x_hi * 1.25).log_scale(), y));
         } else {
             let pad = ((x_hi - x_lo) * 0.05).max(1e-6);
-            body!(builder.build_cartesian_2d(x_lo - pad..x_hi + pad, (lo..hi).log_scale()));
+            body!(builder.build_cartesian_2d(x_lo - pad..x_hi + pad, y));
         }
     }
     Ok(())
@@ -290,6 +320,21 @@ fn draw<DB: DrawingBackend>(plot: &Plot, root: &DrawingArea<DB, Shift>) -> std::
 mod tests {
     use super::*;
     use crate::render::cache_driver::stats::{CacheStats, StageTimes};
+
+    #[test]
+    fn log_axes_label_every_decade_they_span() {
+        // 0.04–1.2: 0.05 and 0.1, 0.2, 0.5, 1 labelled; the grid has every multiple.
+        let (labelled, grid) = log_ticks(0.04, 1.2);
+        assert_eq!(labelled.iter().map(|&v| tick(v)).collect::<Vec<_>>(), ["0.05", "0.1", "0.2", "0.5", "1"]);
+        assert_eq!(grid.len(), 6 + 9 + 1);
+        // Inside one decade too few of 1, 2, 5 fall in the range: every multiple is labelled.
+        let (labelled, _) = log_ticks(0.0018, 0.0065);
+        assert_eq!(
+            labelled.iter().map(|&v| tick(v)).collect::<Vec<_>>(),
+            ["0.002", "0.003", "0.004", "0.005", "0.006"]
+        );
+        assert!(log_ticks(0.0, 1.0).0.is_empty());
+    }
 
     #[test]
     fn tick_labels_have_six_significant_digits_and_no_float_noise() {
