@@ -43,7 +43,7 @@ use super::spheres::SphereTree;
 use super::vpl::{Emitter, Receiver, Vpls};
 use crate::sampling::unit_f64;
 
-/// Most draws of G per shading point (the letters of `distributions` allow 16).
+/// Most draws of G per shading point (its letters in `distributions` times `lightsamples` may reach 16).
 pub const MAX_DRAWS: usize = 16;
 
 /// What G needs of the VPLs: their sphere tree and the range of lobe widths it serves.

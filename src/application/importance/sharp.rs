@@ -25,10 +25,10 @@
 //! estimator draws VPLs (as many as F, U, B and C draw for importance caching, 32 by default; `draws` for
 //! the baselines): exactly when S(s) has no more members with light, else by that many members drawn
 //! systematically in proportion to their exact unoccluded contribution there, so only their visibility is
-//! left to chance; the second is the usual
-//! estimator with every draw that lands in S(s) counted as 0. (With one draw, as before, the split's
-//! variance was 36 % of the 640×360 bathroom's squared error at 2800 caches, seed 0; with four, 10 %, for
-//! 15 % more shadow rays.) S(s) depends on s alone, never on a draw, so both parts stay unbiased for their
+//! left to chance; the second is the usual estimator with every draw that lands in S(s) counted as 0. (With
+//! one draw, as before, the split's variance was 36 % of the 640×360 bathroom's squared error at 2800
+//! caches, seed 0; with four, the estimator's draws at one per technique then, 10 %, for 15 % more shadow
+//! rays.) S(s) depends on s alone, never on a draw, so both parts stay unbiased for their
 //! sums and the whole for the same VPL image (`placement none` is unchanged). A lobe counts as sharp where
 //! its microfacet density exceeds [`D_MIN`] within a cone narrower than the `splitcone` angle; wider lobes
 //! are left to the estimator (their cones would hold hundreds of VPLs). The ball holds a handful of VPLs
