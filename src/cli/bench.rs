@@ -80,7 +80,8 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
     pub repeat: u32,
     /// With `--integrator` naming irradiance caching: render each cachert row at seeds 0..N−1 and report
-    /// the mean and standard deviation of its errors (pbrt-v2 has no seed: its rows are single runs).
+    /// the mean and standard deviation of its errors; pbrt-v2's defaults are rendered min(N, 6) times with
+    /// different random numbers for their pixels (pbrt-v2 takes no seed; see `irc_peer`), its other rows once.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
     pub seeds: u32,
 }

@@ -10,11 +10,19 @@
 //! light paths as pbrt-v3 `path` maxdepth 5) and the same Sampler, over cache budgets and placements, in
 //! this process. CPU time is user + system of the whole render (pbrt-v2: its child process, parsing
 //! included; cachert: parsing to image). With `--seeds N` every cachert row is rendered at seeds 0..N−1 and
-//! shows the mean of its figures and the standard deviation of its errors over the seeds; pbrt-v2 has no
-//! seed (its random numbers are seeded per task), so its rows are single runs. After the table, the
-//! issue's target is checked against pbrt-v2's defaults: for each placement, the cheapest budget within half
-//! of their CPU time that reaches their error off the light, and whether it also does over the whole image.
-//! A benchmark prints figures from one run and asserts nothing.
+//! shows the mean of its figures and the standard deviation of its errors over the seeds. pbrt-v2 takes no
+//! seed, but its render pass seeds each of its tasks by the task's number, and it makes more tasks for more
+//! `--ncores` (see [`v2_render_tasks`]): so its defaults' row is rendered min(N, 6) times with different
+//! random numbers for its pixels, at `--ncores` values that double the task count each time (its priming
+//! pass always runs the same 64 tasks, so the cache it primes does not change). The row's errors are the
+//! mean over those runs; its times are those of the run at `--nthreads`, the only one not oversubscribed.
+//! Its other settings are single runs. Besides the whole image and the pixels off the light, each row gives
+//! the share of the whole image's RMSE held by the emitter and its border (√(whole² − off²) over the whole
+//! image's pixels): the estimate at the scene's pixel samples of how much of each pixel the emitter covers,
+//! which no cache enters. After the table, the issue's target is checked against pbrt-v2's defaults: for
+//! each placement, the cheapest budget within half of their CPU time that reaches their error off the light,
+//! and whether it also does over the whole image. A benchmark prints figures from one run and asserts
+//! nothing.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -41,6 +49,8 @@ const PBRT_V2_SETTINGS: [(f32, u32); 7] =
 const BUDGETS: [usize; 5] = [1000, 2000, 3000, 4000, 8000];
 /// cachert's placements.
 const PLACEMENTS: [&str; 4] = ["vgc+dgs", "vgc", "im", "sd"];
+/// The most runs of pbrt-v2's defaults with different random numbers (the last at 8× `--ncores` 32).
+const MAX_V2_RUNS: usize = 6;
 
 /// One point of the error-versus-time chart.
 #[derive(Clone, Debug, Serialize, PartialEq)]
@@ -64,6 +74,8 @@ pub struct PeerRow {
     pub rmse: f64,
     /// RMSE without the emitter and its 1-pixel border.
     pub rmse_off_light: f64,
+    /// The emitter's and its border's share of `rmse`: √(rmse² − rmse_off_light² · off-light pixels / pixels).
+    pub rmse_light: f64,
     /// Mean HDR-FLIP against `path-ref.pfm`.
     pub flip: f64,
     /// Image mean relative to the reference's, percent.
@@ -72,17 +84,18 @@ pub struct PeerRow {
     pub mean_off_light_pct: f64,
     /// Seeds the figures are the mean over (1: a single run).
     pub seeds: u32,
-    /// Standard deviations over the seeds of `rmse`, `rmse_off_light` and `flip` (`None` for one run).
-    pub sd: Option<[f64; 3]>,
+    /// Standard deviations over the seeds of `rmse`, `rmse_off_light`, `flip` and `rmse_light` (`None` for
+    /// one run).
+    pub sd: Option<[f64; 4]>,
 }
 
 /// pbrt-v2's default setting, the target's row.
 pub const V2_DEFAULTS: &str = "minweight 0.5 nsamples 4096";
 
-/// One measured run: its error figures (RMSE, RMSE off-light, FLIP, mean %, off-light mean %), CPU and
-/// wall seconds, and the wall seconds of caching and of the per-pixel work.
+/// One measured run: its error figures (RMSE, RMSE off-light, FLIP, mean %, off-light mean %, the light's
+/// share of the RMSE), CPU and wall seconds, and the wall seconds of caching and of the per-pixel work.
 struct Run {
-    errors: [f64; 5],
+    errors: [f64; 6],
     times: [f64; 2],
     split: [Option<f64>; 2],
 }
@@ -95,7 +108,7 @@ fn summarise(renderer: &str, series: &str, setting: String, runs: &[Run]) -> Pee
     };
     // A split only when every run has it.
     let opt = |k: usize| runs.iter().all(|r| r.split[k].is_some()).then(|| column(&|r| r.split[k].unwrap_or(0.0)).0);
-    let [rmse, off, flip] = [0, 1, 2].map(|k| column(&|r| r.errors[k]));
+    let [rmse, off, flip, light] = [0, 1, 2, 5].map(|k| column(&|r| r.errors[k]));
     PeerRow {
         renderer: renderer.into(),
         series: series.into(),
@@ -106,12 +119,13 @@ fn summarise(renderer: &str, series: &str, setting: String, runs: &[Run]) -> Pee
         pixels_wall_s: opt(1),
         rmse: rmse.0,
         rmse_off_light: off.0,
+        rmse_light: light.0,
         flip: flip.0,
         mean_pct: column(&|r| r.errors[3]).0,
         mean_off_light_pct: column(&|r| r.errors[4]).0,
         seeds: runs.len() as u32,
-        sd: match (rmse.1, off.1, flip.1) {
-            (Some(a), Some(b), Some(c)) => Some([a, b, c]),
+        sd: match (rmse.1, off.1, flip.1, light.1) {
+            (Some(a), Some(b), Some(c), Some(d)) => Some([a, b, c, d]),
             _ => None,
         },
     }
@@ -128,6 +142,14 @@ pub fn series_names<'a>(rows: impl Iterator<Item = &'a PeerRow>) -> Vec<&'a str>
     names
 }
 
+/// `value` with ` ± sd over n runs` when the row is a mean over several.
+fn spread(r: &PeerRow, value: f64, k: usize) -> String {
+    match r.sd {
+        Some(sd) => format!("{value:.5} ± {:.5} over {} runs", sd[k], r.seeds),
+        None => format!("{value:.5}"),
+    }
+}
+
 /// The verdict on the target: pbrt-v2's error at its defaults in at most half of its CPU time.
 fn verdict(rows: &[PeerRow]) -> String {
     let Some(v2) = rows.iter().find(|r| r.renderer == "pbrt-v2" && r.setting == V2_DEFAULTS) else {
@@ -135,29 +157,44 @@ fn verdict(rows: &[PeerRow]) -> String {
     };
     let limit = 0.5 * v2.cpu_s;
     let mut s = format!(
-        "\nTarget: pbrt-v2's defaults took {:.1} CPU s for RMSE {:.5} whole / {:.5} off the light; cachert must \
-         reach those in at most {limit:.1} CPU s.\n",
-        v2.cpu_s, v2.rmse, v2.rmse_off_light
+        "\nTarget: pbrt-v2's defaults took {:.1} CPU s for RMSE {} whole / {} off the light; cachert must \
+         reach those in at most {limit:.1} CPU s. The emitter and its border hold {} of pbrt-v2's whole-image \
+         RMSE (the estimate of each pixel's emitter coverage at its pixel samples; no cache enters it).\n",
+        v2.cpu_s,
+        spread(v2, v2.rmse, 0),
+        spread(v2, v2.rmse_off_light, 1),
+        spread(v2, v2.rmse_light, 3),
     );
     for name in series_names(rows.iter().filter(|r| r.renderer == "cachert")) {
-        let within = rows.iter().filter(|r| r.renderer == "cachert" && r.series == name && r.cpu_s <= limit);
-        let best = within.filter(|r| r.rmse_off_light <= v2.rmse_off_light).min_by(|a, b| a.cpu_s.total_cmp(&b.cpu_s));
+        let within = || rows.iter().filter(|r| r.renderer == "cachert" && r.series == name && r.cpu_s <= limit);
+        let best =
+            within().filter(|r| r.rmse_off_light <= v2.rmse_off_light).min_by(|a, b| a.cpu_s.total_cmp(&b.cpu_s));
+        let closest = within().min_by(|a, b| a.rmse_off_light.total_cmp(&b.rmse_off_light));
         let _ = match best {
             Some(r) => writeln!(
                 s,
-                "- {name}: off the light met by {} ({:.1} CPU s, {:.2}x; {:.5}); whole image {} ({:.5}{})",
+                "- {name}: off the light met by {} ({:.1} CPU s, {:.2}x; {}); whole image {} ({}); emitter and \
+                 border {}",
                 r.setting,
                 r.cpu_s,
                 r.cpu_s / v2.cpu_s,
-                r.rmse_off_light,
+                spread(r, r.rmse_off_light, 1),
                 if r.rmse <= v2.rmse { "met" } else { "not met" },
-                r.rmse,
-                r.sd.map_or(String::new(), |sd| format!(" ± {:.5} over {} seeds", sd[0], r.seeds)),
+                spread(r, r.rmse, 0),
+                spread(r, r.rmse_light, 3),
             ),
             None => writeln!(
                 s,
-                "- {name}: no budget within {limit:.1} CPU s reaches {:.5} off the light",
-                v2.rmse_off_light
+                "- {name}: no budget within {limit:.1} CPU s reaches {:.5} off the light{}",
+                v2.rmse_off_light,
+                closest.map_or(String::new(), |r| format!(
+                    "; closest: {} ({:.1} CPU s, {:.2}x) at {} ({:+.2} % of pbrt-v2's)",
+                    r.setting,
+                    r.cpu_s,
+                    r.cpu_s / v2.cpu_s,
+                    spread(r, r.rmse_off_light, 1),
+                    100.0 * (r.rmse_off_light / v2.rmse_off_light - 1.0)
+                )),
             ),
         };
     }
@@ -202,15 +239,30 @@ fn masked(test: &Image, reference: &Image, mask: &[bool]) -> (f64, f64, f64) {
     ((se / n).sqrt(), sum / n, sum_ref / n)
 }
 
-/// The error figures of `test` against `reference`.
-fn judge(test: &Image, reference: &Image, mask: &[bool]) -> Result<(f64, f64, f64, f64, f64)> {
+/// The error figures of `test` against `reference`, in [`Run::errors`]' order.
+fn judge(test: &Image, reference: &Image, mask: &[bool]) -> Result<[f64; 6]> {
     let rmse = rmse(test, reference)?;
     let channel_mean = |im: &Image| im.mean().iter().sum::<f64>() / 3.0;
     let (mean, mean_ref) = (channel_mean(test), channel_mean(reference));
     let (rmse_off, mean_off, mean_off_ref) = masked(test, reference, mask);
     let flip = compare(test, reference, &[Metric::Flip])?[0].1;
     let pct = |a: f64, b: f64| if b > 0.0 { 100.0 * (a / b - 1.0) } else { 0.0 };
-    Ok((rmse, rmse_off, flip, pct(mean, mean_ref), pct(mean_off, mean_off_ref)))
+    let off_share = mask.iter().filter(|&&m| m).count() as f64 / mask.len().max(1) as f64;
+    let light = (rmse * rmse - rmse_off * rmse_off * off_share).max(0.0).sqrt();
+    Ok([rmse, rmse_off, flip, pct(mean, mean_ref), pct(mean_off, mean_off_ref), light])
+}
+
+/// pbrt-v2's render-pass task count for `cores` (`--ncores`) and `pixels` (its `SamplerRenderer::Render`:
+/// RoundUpPow2(max(32 · cores, pixels / 256))). Each task seeds its random numbers by its number.
+fn v2_render_tasks(cores: usize, pixels: usize) -> usize {
+    (32 * cores).max(pixels / 256).next_power_of_two()
+}
+
+/// The `--ncores` of `runs` pbrt-v2 runs whose render passes draw different random numbers: `threads` (the
+/// timed run) and then values that double its task count each time.
+fn v2_run_cores(threads: usize, pixels: usize, runs: usize) -> Vec<usize> {
+    let tasks = v2_render_tasks(threads, pixels);
+    std::iter::once(threads).chain((1..runs).map(|i| (tasks << i) / 32)).collect()
 }
 
 /// `text` with the first occurrence of `"TYPE NAME" [old]` replaced by `[value]`.
@@ -321,8 +373,7 @@ pub fn run(args: &BenchArgs) -> Result<String> {
     std::fs::create_dir_all(&scratch).map_err(|e| Error::file(&scratch, e.to_string()))?;
     let mut rows = Vec::new();
     let measure = |img: &Image, times: [f64; 2], split: [Option<f64>; 2]| -> Result<Run> {
-        let (rmse, rmse_off_light, flip, mean_pct, mean_off_light_pct) = judge(img, &reference, &mask)?;
-        Ok(Run { errors: [rmse, rmse_off_light, flip, mean_pct, mean_off_light_pct], times, split })
+        Ok(Run { errors: judge(img, &reference, &mask)?, times, split })
     };
     let mut push = |row: PeerRow| {
         eprintln!("{}", format_row(&row));
@@ -331,11 +382,20 @@ pub fn run(args: &BenchArgs) -> Result<String> {
     for (minweight, nsamples) in PBRT_V2_SETTINGS {
         let t = set_param(&v2_text, "\"float minweight\"", &minweight.to_string())?;
         let t = set_param(&t, "\"integer nsamples\"", &nsamples.to_string())?;
-        let v = run_pbrt_v2(pbrt_v2, &t, &scratch, args.nthreads)?;
         let series = if nsamples == 4096 { "pbrt-v2 minweight" } else { "pbrt-v2 nsamples" };
         let setting = format!("minweight {minweight} nsamples {nsamples}");
-        let run = measure(&v.image, [v.cpu, v.wall], [v.priming, v.render])?;
-        push(summarise("pbrt-v2", series, setting, &[run]));
+        let repeats = if setting == V2_DEFAULTS { (args.seeds as usize).min(MAX_V2_RUNS) } else { 1 };
+        let mut runs: Vec<Run> = Vec::new();
+        for cores in v2_run_cores(args.nthreads, reference.width * reference.height, repeats) {
+            let v = run_pbrt_v2(pbrt_v2, &t, &scratch, cores)?;
+            let mut run = measure(&v.image, [v.cpu, v.wall], [v.priming, v.render])?;
+            // Only the first run is timed: the others oversubscribe the cores to change the task count.
+            if let Some(first) = runs.first() {
+                (run.times, run.split) = (first.times, first.split);
+            }
+            runs.push(run);
+        }
+        push(summarise("pbrt-v2", series, setting, &runs));
     }
     let _ = std::fs::remove_dir_all(&scratch);
     for placement in PLACEMENTS {
@@ -378,7 +438,7 @@ fn format_row(r: &PeerRow) -> String {
         None => format!("{v:.digits$}"),
     };
     format!(
-        "| {} | {} | {} | {} | {:.1} | {:.1} | {} + {} | {} | {} | {} | {:+.2}% | {:+.2}% |",
+        "| {} | {} | {} | {} | {:.1} | {:.1} | {} + {} | {} | {} | {} | {} | {:+.2}% | {:+.2}% |",
         r.renderer,
         r.series,
         r.setting,
@@ -389,6 +449,7 @@ fn format_row(r: &PeerRow) -> String {
         r.pixels_wall_s.map_or("?".into(), |s| format!("{s:.1}")),
         with_sd(0, r.rmse, 5),
         with_sd(1, r.rmse_off_light, 5),
+        with_sd(3, r.rmse_light, 5),
         with_sd(2, r.flip, 4),
         r.mean_pct,
         r.mean_off_light_pct
@@ -397,8 +458,8 @@ fn format_row(r: &PeerRow) -> String {
 
 fn table(rows: &[PeerRow]) -> String {
     let mut s = String::from(
-        "| renderer | series | setting | seeds | CPU s | wall s | wall s: caching + pixels | RMSE | RMSE off-light | HDR-FLIP | mean | off-light mean |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| renderer | series | setting | seeds | CPU s | wall s | wall s: caching + pixels | RMSE | RMSE off-light | RMSE share of light + border | HDR-FLIP | mean | off-light mean |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let _ = writeln!(s, "{}", format_row(r));
@@ -431,20 +492,47 @@ mod tests {
     fn whole_image_and_masked_figures_agree_when_the_mask_keeps_everything() {
         let reference = Image::from_pixels(2, 2, vec![[0.5, 0.2, 0.1], [1.0; 3], [0.0; 3], [0.3, 0.6, 0.9]]).unwrap();
         let test = Image::from_pixels(2, 2, vec![[0.4, 0.2, 0.3], [1.1; 3], [0.2; 3], [0.3, 0.5, 0.9]]).unwrap();
-        let (rmse, rmse_off, _, pct, pct_off) = judge(&test, &reference, &[true; 4]).unwrap();
+        let [rmse, rmse_off, _, pct, pct_off, light] = judge(&test, &reference, &[true; 4]).unwrap();
         assert!((rmse - rmse_off).abs() < 1e-7 && rmse > 0.0, "{rmse} {rmse_off}");
         assert!((pct - pct_off).abs() < 1e-5 && pct > 0.0, "{pct} {pct_off}");
+        assert!(light < 1e-3, "nothing is left out, so the light holds no share: {light}");
+    }
+
+    #[test]
+    fn the_light_share_and_the_off_light_rmse_make_up_the_whole_image_rmse() {
+        // Errors 0.1 (per channel) on the two masked-out pixels, 0.2 and 0 on the kept ones.
+        let reference = Image::from_pixels(2, 2, vec![[0.5; 3]; 4]).unwrap();
+        let test = Image::from_pixels(2, 2, vec![[0.6; 3], [0.4; 3], [0.7; 3], [0.5; 3]]).unwrap();
+        let [rmse, off, _, _, _, light] = judge(&test, &reference, &[false, false, true, true]).unwrap();
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-6;
+        assert!(close(rmse, (0.06f64 / 4.0).sqrt()) && close(off, 0.02f64.sqrt()), "{rmse} {off}");
+        assert!(close(light, (0.02f64 / 4.0).sqrt()), "{light}");
+        assert!(close(rmse * rmse, light * light + off * off / 2.0));
+    }
+
+    #[test]
+    fn pbrt_v2_runs_at_these_core_counts_make_ever_more_render_tasks() {
+        // pbrt-v2 at 256×256: 256 tasks for 1–8 cores, then 32 per core rounded up to a power of two.
+        assert_eq!([1, 2, 8, 9, 16, 17].map(|c| v2_render_tasks(c, 256 * 256)), [256, 256, 256, 512, 512, 1024]);
+        let cores = v2_run_cores(2, 256 * 256, 5);
+        assert_eq!(cores, [2, 16, 32, 64, 128]);
+        let tasks: Vec<usize> = cores.iter().map(|&c| v2_render_tasks(c, 256 * 256)).collect();
+        assert_eq!(tasks, [256, 512, 1024, 2048, 4096], "every run has its own task count, so its own seeds");
+        assert_eq!(v2_run_cores(16, 256 * 256, 2), [16, 32]);
+        assert_eq!(v2_run_cores(2, 256 * 256, 1), [2]);
     }
 
     fn row(renderer: &str, series: &str, setting: &str, cpu: f64, errors: [f64; 2]) -> PeerRow {
-        let run = Run { errors: [errors[0], errors[1], 0.05, 0.0, 0.0], times: [cpu, cpu / 2.0], split: [None; 2] };
+        let light = (errors[0] * errors[0] - errors[1] * errors[1]).max(0.0).sqrt();
+        let run =
+            Run { errors: [errors[0], errors[1], 0.05, 0.0, 0.0, light], times: [cpu, cpu / 2.0], split: [None; 2] };
         summarise(renderer, series, setting.into(), &[run])
     }
 
     #[test]
     fn a_row_over_seeds_holds_the_means_and_the_deviations_of_the_errors() {
         let run = |e: f64, cpu: f64| Run {
-            errors: [e, e / 2.0, e * 10.0, 0.1, 0.2],
+            errors: [e, e / 2.0, e * 10.0, 0.1, 0.2, e / 4.0],
             times: [cpu, 1.0],
             split: [Some(1.0), None],
         };
@@ -453,6 +541,7 @@ mod tests {
         let sd = r.sd.unwrap();
         let s2 = 2f64.sqrt();
         assert!((sd[0] - s2).abs() < 1e-12 && (sd[1] - s2 / 2.0).abs() < 1e-12 && (sd[2] - 10.0 * s2).abs() < 1e-9);
+        assert!(r.rmse_light == 0.5 && (sd[3] - s2 / 4.0).abs() < 1e-12);
         assert_eq!((r.caching_wall_s, r.pixels_wall_s), (Some(1.0), None), "a split missing in a run is unknown");
         let one = summarise("pbrt-v2", "x", "y".into(), &[run(1.0, 2.0)]);
         assert_eq!((one.seeds, one.sd), (1, None));
@@ -476,7 +565,14 @@ mod tests {
             v.contains("- vgc: off the light met by caches 2000 (15.0 CPU s, 0.38x; 0.00190); whole image not met"),
             "{v}"
         );
-        assert!(v.contains("- im: no budget within 20.0 CPU s reaches 0.00200 off the light"), "{v}");
+        assert!(v.contains("emitter and border 0.00484") && v.contains("hold 0.00458 of"), "{v}");
+        assert!(
+            v.contains(
+                "- im: no budget within 20.0 CPU s reaches 0.00200 off the light; closest: caches 1000 (12.0 CPU s, \
+                 0.30x) at 0.00300 (+50.00 % of pbrt-v2's)"
+            ),
+            "{v}"
+        );
         assert_eq!(verdict(&rows[1..]), "", "no verdict without pbrt-v2's defaults");
     }
 
