@@ -12,7 +12,7 @@
 //! included; cachert: parsing to image). With `--seeds N` every cachert row is rendered at seeds 0..N−1 and
 //! shows the mean of its figures and the standard deviation of its errors over the seeds. pbrt-v2 takes no
 //! seed, but its render pass seeds each of its tasks by the task's number, and it makes more tasks for more
-//! `--ncores` (see [`v2_render_tasks`]): so its defaults' row is rendered min(N, 6) times with different
+//! `--ncores` (`v2_render_tasks` below): so its defaults' row is rendered min(N, 6) times with different
 //! random numbers for its pixels, at `--ncores` values that double the task count each time (its priming
 //! pass always runs the same 64 tasks, so the cache it primes does not change). The row's errors are the
 //! mean over those runs; its times are those of the run at `--nthreads`, the only one not oversubscribed.
