@@ -1,6 +1,7 @@
 //! Behaviour of `cachert experiment`: the sweep's rows, files and table on a shipped scene, the error
 //! falling with the budget, the per-pixel comparison against the converged image, and the reference being
-//! reused on a second run; an importance-caching sweep times both of its many-light baselines.
+//! reused on a second run; `--replot` redraws a finished sweep's charts from its results.csv; an
+//! importance-caching sweep times both of its many-light baselines.
 
 mod common;
 
@@ -46,6 +47,25 @@ fn a_sweep_writes_every_row_and_its_files_and_reuses_the_reference() {
     assert!(dir.path("results.json").is_file() && dir.path("scenes-spheres-cacheao-converged.exr").is_file());
     assert!(table.contains("| vgc+dgs |") && table.contains("converged"), "{table}");
 
+    // `--replot` draws the same chart again from results.csv alone (its numbers are rounded there, so the
+    // drawing may move by a pixel: the series and the axes are compared, not the bytes).
+    let svgs: Vec<String> = dir.entries().into_iter().filter(|n| n.ends_with("-error-vs-time.svg")).collect();
+    assert_eq!(svgs.len(), 1, "{:?}", dir.entries());
+    let drawn = std::fs::read_to_string(dir.path(&svgs[0])).unwrap();
+    std::fs::remove_file(dir.path(&svgs[0])).unwrap();
+    let written = cachert::experiment::replot::replot(&dir.0).unwrap();
+    assert_eq!(written, vec![dir.path(&svgs[0])]);
+    let redrawn = std::fs::read_to_string(&written[0]).unwrap();
+    let texts = |svg: &str| -> Vec<String> {
+        svg.split("<text")
+            .skip(1)
+            .map(|t| t.split_once('>').unwrap().1.split('<').next().unwrap().trim().to_string())
+            .collect()
+    };
+    assert_eq!(texts(&drawn), texts(&redrawn), "the same series, ticks and labels");
+    let labels = texts(&redrawn);
+    assert!(["ao", "im", "vgc+dgs", "wall seconds (log)"].iter().all(|w| labels.iter().any(|t| t == w)), "{labels:?}");
+
     // A second sweep reuses the stored reference and converged image.
     let mut log = Vec::new();
     run(&sweep(&dir.0, vec![1]), &mut |l| log.push(l.to_string())).unwrap();
@@ -79,4 +99,19 @@ fn an_importance_caching_sweep_times_both_many_light_baselines() {
     // Both estimate the reference's sum: more draws, less error against it.
     let err = |p: &str| rows.iter().find(|r| r.placement == p).unwrap().rmse;
     assert!(err("power:8") < err("power:1") && err("uniform:8") < err("uniform:1"), "{rows:#?}");
+}
+
+#[test]
+fn replot_refuses_a_bad_results_file_with_its_line_and_column_and_writes_nothing() {
+    let dir = common::TempDir::new("replot-bad");
+    dir.write("results.csv", "scene,placement,caches,seed,rmse,flip,total_s\nbox,vgc,100,0,0.1,zero,2.0\n");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_cachert"))
+        .args(["experiment", "--replot"])
+        .arg(&dir.0)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("results.csv:2:19: expected the HDR-FLIP (a finite number), found \"zero\""), "{err}");
+    assert_eq!(dir.entries(), ["results.csv"], "nothing drawn");
 }

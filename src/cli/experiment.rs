@@ -25,7 +25,7 @@ pub struct ExperimentArgs {
     #[arg(long, requires = "spec", conflicts_with = "emit_jobs")]
     pub collect: bool,
     /// Scene files (repeatable).
-    #[arg(long = "scene", required_unless_present = "spec", conflicts_with = "spec")]
+    #[arg(long = "scene", required_unless_present_any = ["spec", "replot"], conflicts_with = "spec")]
     pub scenes: Vec<PathBuf>,
     /// Film resolution WxH for every scene (e.g. 640x360).
     #[arg(long, value_parser = super::parse_resolution, conflicts_with = "spec")]
@@ -56,10 +56,21 @@ pub struct ExperimentArgs {
     /// the same reference.
     #[arg(long = "baseline-samples", visible_alias = "ao-samples", conflicts_with = "spec")]
     pub baseline_samples: Option<String>,
+    /// Render nothing: redraw the error-against-time charts of a finished flag-form sweep in folder DIR from
+    /// its results.csv (to bring a change to the charts to results already measured).
+    #[arg(long, value_name = "DIR", conflicts_with_all = [
+        "spec", "scenes", "resolution", "integrator", "caches", "placements", "seeds", "set", "out", "nthreads",
+        "baseline_samples",
+    ])]
+    pub replot: Option<PathBuf>,
 }
 
 /// Runs the sweep and returns the table.
 pub fn run(a: &ExperimentArgs) -> Result<String> {
+    if let Some(dir) = &a.replot {
+        let written = crate::experiment::replot::replot(dir)?;
+        return Ok(written.iter().map(|p| format!("redrawn: {} (and .png)\n", p.display())).collect());
+    }
     if let Some(path) = &a.spec {
         return run_spec(a, path);
     }

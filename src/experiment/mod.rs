@@ -26,6 +26,7 @@ pub mod chart;
 pub mod figures;
 pub mod jobs;
 mod per_pixel;
+pub mod replot;
 pub mod report;
 pub mod spec;
 pub mod summary;
