@@ -23,7 +23,15 @@ pub struct PixelSamples {
     dim: u64,
     rng: Rng,
     order_scratch: OrderScratch,
+    /// The keys of the first dimensions of `keys_pixel`'s samples (`keys_known` of them): every sample of a
+    /// pixel uses the same ones, so they are hashed once per pixel, not once per sample.
+    keys: [u64; KEPT_KEYS],
+    keys_known: usize,
+    keys_pixel: u64,
 }
+
+/// How many dimension keys [`PixelSamples`] remembers per pixel (later dimensions are hashed each time).
+const KEPT_KEYS: usize = 16;
 
 /// Stage tag of camera-sample streams in random keys.
 const STAGE_CAMERA: u64 = 0x63616d;
@@ -42,20 +50,40 @@ impl PixelSamples {
             dim: 0,
             rng: Rng::new(0),
             order_scratch: OrderScratch::default(),
+            keys: [0; KEPT_KEYS],
+            keys_known: 0,
+            keys_pixel: 0,
         }
     }
 
     /// Positions the stream at sample `index` of pixel (x, y).
     pub fn start(&mut self, pixel: [i32; 2], index: u32) {
         self.pixel_key = ((pixel[0] as u32 as u64) << 32) | pixel[1] as u32 as u64;
+        if self.pixel_key != self.keys_pixel {
+            (self.keys_pixel, self.keys_known) = (self.pixel_key, 0);
+        }
         self.index = index;
         self.dim = 0;
-        self.rng = Rng::new(hash3(self.seed ^ STAGE_CAMERA, self.pixel_key, index as u64));
+        // Only `random` draws from the generator; the stratified points are functions of their keys.
+        if self.kind == SamplerKind::Random {
+            self.rng = Rng::new(hash3(self.seed ^ STAGE_CAMERA, self.pixel_key, index as u64));
+        }
     }
 
+    /// The key of the next dimension: hash3(seed, pixel, dimension), remembered for the pixel's next samples.
     fn dim_key(&mut self) -> u64 {
         self.dim += 1;
-        hash3(self.seed, self.pixel_key, self.dim)
+        let d = (self.dim - 1) as usize;
+        if d < self.keys_known {
+            return self.keys[d];
+        }
+        let k = hash3(self.seed, self.pixel_key, self.dim);
+        // Dimensions are drawn in order, so an unknown one is the next to remember.
+        if d == self.keys_known && d < KEPT_KEYS {
+            self.keys[d] = k;
+            self.keys_known += 1;
+        }
+        k
     }
 
     /// The next two dimensions: stratified across the pixel's samples (or uniform for `random`).

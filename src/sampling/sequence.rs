@@ -68,7 +68,10 @@ pub fn permute(mut i: u32, len: u32, key: u32) -> u32 {
             break;
         }
     }
-    (i.wrapping_add(p)) % len
+    let j = i.wrapping_add(p);
+    // Pixel sample counts are mostly powers of two, where a mask is the remainder without a division (the
+    // division was the costliest instruction of drawing a sample).
+    if len.is_power_of_two() { j & (len - 1) } else { j % len }
 }
 
 #[cfg(test)]
