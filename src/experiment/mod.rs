@@ -219,17 +219,27 @@ pub fn run(sweep: &Sweep, log: &mut dyn FnMut(&str)) -> Result<(Vec<Row>, String
         }
     }
     write_results(&rows, &sweep.out)?;
-    let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
-    scenes.dedup();
     match chart::font() {
         Ok(()) => {
-            for scene in scenes {
-                chart::write(&rows, scene, &sweep.out.join(format!("{scene}-error-vs-time.svg")))?;
-            }
+            write_charts(&rows, &sweep.out)?;
         }
         Err(e) => log(&format!("no charts: {e}")),
     }
     Ok((rows.clone(), table(&rows, sweep)))
+}
+
+/// Writes the error-against-time chart of each scene of `rows` into `out` (`SCENE-error-vs-time.svg`, and
+/// the PNG beside it); returns the SVGs. The charts' font must have been found ([`chart::font`]).
+pub(crate) fn write_charts(rows: &[Row], out: &Path) -> Result<Vec<PathBuf>> {
+    let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
+    scenes.dedup();
+    let mut written = Vec::new();
+    for scene in scenes {
+        let svg = out.join(format!("{scene}-error-vs-time.svg"));
+        chart::write(rows, scene, &svg)?;
+        written.push(svg);
+    }
+    Ok(written)
 }
 
 fn write_results(rows: &[Row], out: &Path) -> Result<()> {

@@ -74,8 +74,8 @@ pub fn read_rows(path: &Path, text: &str) -> Result<Vec<Row>> {
     Ok(rows)
 }
 
-/// Redraws `dir`'s charts (`SCENE-error-vs-time.svg` and `.png` per scene) from `dir/results.csv`; returns
-/// the SVGs written. Without a font for their text it writes none and says why.
+/// Redraws `dir`'s charts (`SCENE-error-vs-time.svg` and `.png` per scene, as the sweep draws them) from
+/// `dir/results.csv`; returns the SVGs written. Without a font for their text it writes none and says why.
 pub fn replot(dir: &Path) -> Result<Vec<PathBuf>> {
     let path = dir.join("results.csv");
     let text = std::fs::read_to_string(&path).map_err(|e| Error::file(&path, format!("cannot read: {e}")))?;
@@ -84,15 +84,7 @@ pub fn replot(dir: &Path) -> Result<Vec<PathBuf>> {
         return Err(Error::file(&path, "no runs to draw (only a header)"));
     }
     chart::font()?;
-    let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
-    scenes.dedup();
-    let mut written = Vec::new();
-    for scene in scenes {
-        let svg = dir.join(format!("{scene}-error-vs-time.svg"));
-        chart::write(&rows, scene, &svg)?;
-        written.push(svg);
-    }
-    Ok(written)
+    super::write_charts(&rows, dir)
 }
 
 #[cfg(test)]
