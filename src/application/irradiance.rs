@@ -36,6 +36,7 @@ use crate::render::params::{IntegratorParams, Parameter};
 use crate::sampling::warp::equal_area_hemisphere;
 use crate::sampling::{Frame, Rng, Stratum};
 use crate::scene::Scene;
+use crate::scene::accel::PrimOrigin;
 use crate::scene::ray::{Ray, RayCounters, offset_ray_origin};
 use crate::shading::bsdf::Bsdf;
 use crate::shading::bxdf::BxdfFlags;
@@ -138,7 +139,7 @@ impl IrradianceCache {
                 continue;
             }
             let ray = Ray::new(offset_ray_origin(at.p, at.p_error, at.ng, w), w);
-            let l = self.incident(cx, ray, &mut bsdf, rng, rays);
+            let l = self.incident(cx, ray, at.origin, &mut bsdf, rng, rays);
             if let Some(r) = radiance.as_deref_mut() {
                 r[k] = luminance(l);
             }
@@ -147,9 +148,17 @@ impl IrradianceCache {
         sum * self.norm
     }
 
-    /// Indirect radiance arriving along `ray` (see the module documentation for what counts).
-    /// `bsdf` is scratch storage the path refills at each vertex.
-    fn incident(&self, cx: &Lit<'_>, mut ray: Ray, bsdf: &mut Bsdf, rng: &mut Rng, rays: &mut RayCounters) -> Spectrum {
+    /// Indirect radiance arriving along `ray`, which leaves the surface `from` (see the module documentation
+    /// for what counts). `bsdf` is scratch storage the path refills at each vertex.
+    fn incident(
+        &self,
+        cx: &Lit<'_>,
+        mut ray: Ray,
+        mut from: Option<PrimOrigin>,
+        bsdf: &mut Bsdf,
+        rng: &mut Rng,
+        rays: &mut RayCounters,
+    ) -> Spectrum {
         let (scene, sh) = (cx.scene, &cx.shading);
         let mut l = Spectrum::ZERO;
         let mut beta = Spectrum::ONE;
@@ -158,7 +167,7 @@ impl IrradianceCache {
         let mut pass = PassThrough::default();
         loop {
             rays.camera += 1;
-            let Some(si) = scene.geometry.intersect(&ray) else {
+            let Some(si) = scene.geometry.intersect_from(&ray, from) else {
                 if specular {
                     l += beta * sh.lights.le_escaped(&ray);
                 }
@@ -175,6 +184,7 @@ impl IrradianceCache {
             if !sh.bsdf_into(&si, bsdf) {
                 let Some(next) = pass.past(&si, &ray) else { break };
                 ray = next;
+                from = Some(si.origin);
                 continue;
             }
             let wo = -ray.d;
@@ -196,6 +206,7 @@ impl IrradianceCache {
             }
             beta *= bs.f * bs.wi.dot(bsdf.shading_normal()).abs() / bs.pdf;
             ray = si.spawn_ray(bs.wi);
+            from = Some(si.origin);
             // pbrt-v3 path's Russian roulette (after the third bounce, throughput below 1).
             let rr = beta.max_element();
             if rr < 1.0 && vertices > 3 {

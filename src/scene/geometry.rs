@@ -50,6 +50,60 @@ pub struct Geometry {
     pub curve_info: Vec<ShapeInfo>,
     /// The BVHs.
     pub accel: Accel,
+    /// Per world mesh, per triangle: what [`triangle_interaction`] computes from the vertices and uvs alone
+    /// (see [`TriangleFrame`]); filled by [`Geometry::new`].
+    frames: Vec<Vec<TriangleFrame>>,
+}
+
+/// The parts of a triangle's surface interaction that do not depend on where it is hit: the unit normal of
+/// its vertex winding (before any flip) and ∂p/∂u. Computed once per triangle instead of at every hit —
+/// the normalisation and the division by the uv determinant sat on the chain a path waits on for its
+/// next ray. The values are exactly those computed at a hit (same function).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct TriangleFrame {
+    ng: Vec3A,
+    dpdu: Vec3A,
+    /// The shading normal when the three vertex normals are equal (a flat face of a mesh with normals): it is
+    /// then the same at every point, and interpolating and normalising it at each hit would only add rounding.
+    ns_flat: Option<Vec3A>,
+}
+
+impl TriangleFrame {
+    fn of(mesh: &TriangleMesh, tri: usize) -> TriangleFrame {
+        let [p0, p1, p2] = mesh.triangle(tri).map(Vec3A::from);
+        let idx = &mesh.indices[3 * tri..3 * tri + 3];
+        let [uv0, uv1, uv2] = triangle_uvs(mesh, idx);
+        let (dp02, dp12) = (p0 - p2, p1 - p2);
+        let mut ng = dp02.cross(dp12).normalize_or_zero();
+        if ng == Vec3A::ZERO {
+            ng = Vec3A::Z;
+        }
+        let duv02 = [uv0[0] - uv2[0], uv0[1] - uv2[1]];
+        let duv12 = [uv1[0] - uv2[0], uv1[1] - uv2[1]];
+        let det = duv02[0] * duv12[1] - duv02[1] * duv12[0];
+        let mut dpdu = if det.abs() < 1e-8 { Vec3A::ZERO } else { (dp02 * duv12[1] - dp12 * duv02[1]) / det };
+        if dpdu.cross(ng).length_squared() == 0.0 {
+            dpdu = crate::sampling::Frame::from_normal(ng).s;
+        }
+        let ns_flat = match mesh.normals.is_empty() {
+            true => None,
+            false => {
+                let [n0, n1, n2] = [0, 1, 2].map(|k| Vec3A::from(mesh.normals[idx[k] as usize]));
+                (n0 == n1 && n1 == n2).then(|| n0.normalize_or_zero()).filter(|n| *n != Vec3A::ZERO)
+            }
+        };
+        TriangleFrame { ng, dpdu, ns_flat }
+    }
+}
+
+/// The uvs of a triangle's vertices `idx` (pbrt-v3's defaults (0,0), (1,0), (1,1) for a mesh without uvs).
+#[inline]
+fn triangle_uvs(mesh: &TriangleMesh, idx: &[u32]) -> [[f32; 2]; 3] {
+    if mesh.uvs.is_empty() {
+        [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]
+    } else {
+        [mesh.uvs[idx[0] as usize], mesh.uvs[idx[1] as usize], mesh.uvs[idx[2] as usize]]
+    }
 }
 
 /// What is known about the surface at a ray hit.
@@ -86,9 +140,31 @@ impl SurfaceInteraction {
 }
 
 impl Geometry {
+    /// The geometry of a scene: its meshes, object definitions, analytic shapes and curves (their material and
+    /// emission) and the BVHs over them.
+    pub fn new(
+        meshes: Vec<TriangleMesh>,
+        objects: Vec<ObjectDef>,
+        quadric_info: Vec<ShapeInfo>,
+        curve_info: Vec<ShapeInfo>,
+        accel: Accel,
+    ) -> Geometry {
+        let frames =
+            meshes.iter().map(|m| (0..m.triangle_count()).map(|t| TriangleFrame::of(m, t)).collect()).collect();
+        Geometry { meshes, objects, quadric_info, curve_info, accel, frames }
+    }
+
     /// The nearest surface along `ray`.
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceInteraction> {
         let hit = self.accel.intersect(ray)?;
+        Some(self.interaction(&hit, ray))
+    }
+
+    /// [`Geometry::intersect`] for a ray leaving the surface `from` (which is then not tested: a ray leaving a
+    /// planar triangle cannot hit it, see `PrimOrigin`); the hit is the same.
+    #[inline]
+    pub fn intersect_from(&self, ray: &Ray, from: Option<PrimOrigin>) -> Option<SurfaceInteraction> {
+        let hit = self.accel.intersect_from(ray, from)?;
         Some(self.interaction(&hit, ray))
     }
 
@@ -137,7 +213,14 @@ impl Geometry {
             None => &self.meshes,
         };
         let mut si = match hit.prim {
-            PrimRef::Triangle { mesh, tri } => triangle_interaction(&meshes[mesh as usize], tri as usize, hit),
+            PrimRef::Triangle { mesh, tri } => {
+                let (m, t) = (&meshes[mesh as usize], tri as usize);
+                let frame = match hit.instance {
+                    None => self.frames.get(mesh as usize).and_then(|f| f.get(t)).copied(),
+                    Some(_) => None,
+                };
+                triangle_interaction(m, t, hit, frame.unwrap_or_else(|| TriangleFrame::of(m, t)))
+            }
             PrimRef::Quadric(q) => {
                 let s = self.accel.quadrics[q as usize].surface(&QuadricHit {
                     t: hit.t,
@@ -200,27 +283,15 @@ fn analytic_interaction(
 }
 
 /// pbrt-v3 `Triangle::Intersect`'s surface data from barycentrics.
-fn triangle_interaction(mesh: &TriangleMesh, tri: usize, hit: &Hit) -> SurfaceInteraction {
+fn triangle_interaction(mesh: &TriangleMesh, tri: usize, hit: &Hit, frame: TriangleFrame) -> SurfaceInteraction {
     let [b1, b2] = hit.b;
     let b0 = 1.0 - b1 - b2;
     let [p0, p1, p2] = mesh.triangle(tri).map(Vec3A::from);
     let p = p0 * b0 + p1 * b1 + p2 * b2;
     let p_abs_sum = (p0 * b0).abs() + (p1 * b1).abs() + (p2 * b2).abs();
     let idx = &mesh.indices[3 * tri..3 * tri + 3];
-    let uv_of = |k: usize, default: [f32; 2]| if mesh.uvs.is_empty() { default } else { mesh.uvs[idx[k] as usize] };
-    let (uv0, uv1, uv2) = (uv_of(0, [0.0, 0.0]), uv_of(1, [1.0, 0.0]), uv_of(2, [1.0, 1.0]));
-    let (dp02, dp12) = (p0 - p2, p1 - p2);
-    let mut ng = dp02.cross(dp12).normalize_or_zero();
-    if ng == Vec3A::ZERO {
-        ng = Vec3A::Z;
-    }
-    let duv02 = [uv0[0] - uv2[0], uv0[1] - uv2[1]];
-    let duv12 = [uv1[0] - uv2[0], uv1[1] - uv2[1]];
-    let det = duv02[0] * duv12[1] - duv02[1] * duv12[0];
-    let mut dpdu = if det.abs() < 1e-8 { Vec3A::ZERO } else { (dp02 * duv12[1] - dp12 * duv02[1]) / det };
-    if dpdu.cross(ng).length_squared() == 0.0 {
-        dpdu = crate::sampling::Frame::from_normal(ng).s;
-    }
+    let [uv0, uv1, uv2] = triangle_uvs(mesh, idx);
+    let TriangleFrame { mut ng, dpdu, ns_flat } = frame;
     let uv = [b0 * uv0[0] + b1 * uv1[0] + b2 * uv2[0], b0 * uv0[1] + b1 * uv1[1] + b2 * uv2[1]];
     let mut ns = ng;
     if mesh.normals.is_empty() {
@@ -229,10 +300,14 @@ fn triangle_interaction(mesh: &TriangleMesh, tri: usize, hit: &Hit) -> SurfaceIn
         }
         ns = ng;
     } else {
-        let n = |k: usize| Vec3A::from(mesh.normals[idx[k] as usize]);
-        let interp = (n(0) * b0 + n(1) * b1 + n(2) * b2).normalize_or_zero();
-        if interp != Vec3A::ZERO {
-            ns = interp;
+        if let Some(n) = ns_flat {
+            ns = n;
+        } else {
+            let n = |k: usize| Vec3A::from(mesh.normals[idx[k] as usize]);
+            let interp = (n(0) * b0 + n(1) * b1 + n(2) * b2).normalize_or_zero();
+            if interp != Vec3A::ZERO {
+                ns = interp;
+            }
         }
         if ng.dot(ns) < 0.0 {
             ng = -ng;

@@ -298,13 +298,13 @@ impl SceneBuilder {
             std::mem::take(&mut self.curve_segments),
         );
         stats.bvh_secs = t.elapsed().as_secs_f64();
-        let geometry = Geometry {
-            meshes: std::mem::take(&mut self.meshes),
-            objects: defs,
-            quadric_info: std::mem::take(&mut self.quadric_info),
-            curve_info: std::mem::take(&mut self.curve_info),
+        let geometry = Geometry::new(
+            std::mem::take(&mut self.meshes),
+            defs,
+            std::mem::take(&mut self.quadric_info),
+            std::mem::take(&mut self.curve_info),
             accel,
-        };
+        );
         stats.shapes = self.shape_count;
         stats.shape_types = std::mem::take(&mut self.shape_types).into_iter().collect();
         stats.triangles = geometry.stored_triangles();

@@ -279,8 +279,7 @@ impl<'a> Lights<'a> {
             let d = [p[0] - at.x[i], p[1] - at.y[i], p[2] - at.z[i]];
             let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
             let len = d2.sqrt();
-            let cos = (nn.x * d[0] + nn.y * d[1] + nn.z * d[2]).abs() / len;
-            let f = d2 / cos;
+            let f = d2 * len / (nn.x * d[0] + nn.y * d[1] + nn.z * d[2]).abs();
             let pdf = f / tri_area;
             let wi = d.map(|c| c / len); // glam's `normalize`: each coordinate divided by the length
             let faces = e.two_sided | (nn.x * -wi[0] + nn.y * -wi[1] + nn.z * -wi[2] > 0.0);
