@@ -46,7 +46,7 @@ const SCENE: &str = "bitterli-cornell-box-v3";
 const PBRT_V2_SETTINGS: [(f32, u32); 7] =
     [(0.2, 4096), (0.5, 4096), (0.7, 4096), (0.9, 4096), (0.5, 256), (0.5, 1024), (0.5, 2048)];
 /// cachert's cache budgets.
-const BUDGETS: [usize; 5] = [1000, 2000, 3000, 4000, 8000];
+const BUDGETS: [usize; 6] = [1000, 2000, 3000, 3500, 4000, 8000];
 /// cachert's placements.
 const PLACEMENTS: [&str; 4] = ["vgc+dgs", "vgc", "im", "sd"];
 /// The most runs of pbrt-v2's defaults with different random numbers (the last at 8× `--ncores` 32).
