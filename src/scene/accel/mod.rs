@@ -137,11 +137,18 @@ pub struct OccluderHint {
     inner: u32,
 }
 
-/// What an occlusion query leaves out: a top-level triangle, or a triangle inside one instance.
+/// What a query leaves out: a top-level triangle, or a triangle inside one instance.
 #[derive(Clone, Copy, Debug, Default)]
 struct Skip {
     top: Option<PrimRef>,
     inner: Option<(u32, PrimRef)>,
+}
+
+impl Skip {
+    /// What `skip` leaves out inside instance `i`'s object BVH (its triangle there, as that level's top).
+    fn inside(skip: Option<&Skip>, i: u32) -> Option<Skip> {
+        skip.and_then(|k| k.inner).filter(|(j, _)| *j == i).map(|(_, p)| Skip { top: Some(p), inner: None })
+    }
 }
 
 struct Boxed(Aabb);
@@ -581,10 +588,7 @@ impl Accel {
                 PrimRef::Instance(i) => {
                     let inst = &self.instances[i as usize];
                     let local = inst.local_ray(ray, r.t_max);
-                    let inner_skip = skip
-                        .and_then(|k| k.inner)
-                        .filter(|(j, _)| *j == i)
-                        .map(|(_, p)| Skip { top: Some(p), inner: None });
+                    let inner_skip = Skip::inside(skip, i);
                     self.nearest(&self.objects[inst.object as usize], &local, inner_skip.as_ref())
                         .map(|h| Hit { instance: Some(i), ..h })
                 }
@@ -639,10 +643,7 @@ impl Accel {
                     PrimRef::Instance(i) => {
                         let inst = &self.instances[i as usize];
                         let local = inst.local_ray(ray, ray.t_max);
-                        let inner_skip = skip
-                            .and_then(|k| k.inner)
-                            .filter(|(j, _)| *j == i)
-                            .map(|(_, p)| Skip { top: Some(p), inner: None });
+                        let inner_skip = Skip::inside(skip, i);
                         let local_shear = RayShear::new(local.o, local.d);
                         self.any(&self.objects[inst.object as usize], &local, &local_shear, inner_skip.as_ref())
                             .map(|(inner, _)| inner)
@@ -711,6 +712,34 @@ mod tests {
             assert!((h.t - 2.0).abs() < 1e-6);
             assert!(a.occluded(&Ray::new(o, -Vec3A::Z)));
         }
+    }
+
+    #[test]
+    fn a_nearest_query_leaving_a_triangle_finds_what_the_plain_query_finds() {
+        // Quads at z = 1 (mesh 0) and z = 3 (mesh 1), in the world and again inside an instance moved to x = 10.
+        let mut top = quad(1.0, 0);
+        top.extend(quad(3.0, 1));
+        top.push(BuildPrim { r: PrimRef::Instance(0), verts: [[0.0; 3]; 3] });
+        let mut object = quad(1.0, 0);
+        object.extend(quad(3.0, 1));
+        let m = Affine3A::from_translation(glam::Vec3::new(10.0, 0.0, 0.0));
+        let inst = InstanceXf { object: 0, world_from_object: m, object_from_world: m.inverse() };
+        let a = Accel::build(top, vec![object], vec![inst], vec![], vec![], vec![]);
+        for (x, instance) in [(0.0, None), (10.0, Some(0))] {
+            // (0.1, 0.2) lies in triangle 1 of the lower quad; rays leave it upward and downward.
+            let from = PrimOrigin { prim: PrimRef::Triangle { mesh: 0, tri: 1 }, instance };
+            let up = Ray::new(Vec3A::new(x + 0.1, 0.2, 1.0), Vec3A::Z);
+            let h = a.intersect_from(&up, Some(from)).expect("the upper quad");
+            assert_eq!(Some(h), a.intersect(&up));
+            assert!(matches!(h.prim, PrimRef::Triangle { mesh: 1, .. }) && h.instance == instance && h.t == 2.0);
+            let down = Ray::new(Vec3A::new(x + 0.1, 0.2, 1.0), -Vec3A::Z);
+            assert_eq!((a.intersect_from(&down, Some(from)), a.intersect(&down)), (None, None));
+        }
+        // Leaving the instance's triangle does not leave out the world's copy of it.
+        let from = PrimOrigin { prim: PrimRef::Triangle { mesh: 0, tri: 1 }, instance: Some(0) };
+        let up = Ray::new(Vec3A::new(0.1, 0.2, 0.0), Vec3A::Z);
+        let h = a.intersect_from(&up, Some(from)).expect("the world's lower quad");
+        assert!(matches!(h.prim, PrimRef::Triangle { mesh: 0, tri: 1 }) && h.instance.is_none() && h.t == 1.0);
     }
 
     #[test]
