@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use cachert::application::registry::APPLICATIONS;
-use cachert::golden::{self, Manifest, Verdict, matrix};
+use cachert::golden::{self, Manifest, Rule, Verdict, matrix};
 use cachert::image::{self, Image};
 use cachert::metrics::{Metric, compare};
 use cachert::placement::registry::NAMES;
@@ -74,12 +74,44 @@ fn every_registered_placement_and_application_has_a_golden_with_the_matrix_setti
 
 #[test]
 fn every_golden_reproduces() {
-    let outcomes = golden::check(&golden_dir(), None, None, &mut |o| eprintln!("{}", o.line())).unwrap();
+    let outcomes = golden::check(&golden_dir(), None, None, false, &mut |o| eprintln!("{}", o.line())).unwrap();
     let failed: Vec<String> = outcomes.iter().filter(|o| !o.verdict.passed()).map(|o| o.line()).collect();
     let secs: f64 = outcomes.iter().map(|o| o.secs).sum();
     eprintln!("{} goldens in {secs:.1} s", outcomes.len());
     assert!(failed.is_empty(), "golden failures:\n{}", failed.join("\n"));
     assert_eq!(outcomes.len(), manifest().entries.len());
+    // On the goldens' own platform nothing passes by the tolerance.
+    let here = golden::platform();
+    for (o, e) in outcomes.iter().zip(&manifest().entries) {
+        if e.recorded.platform == here {
+            assert_eq!((&o.rule, &o.verdict), (&Rule::Bits, &Verdict::Identical), "{}", o.line());
+        }
+    }
+}
+
+/// The architecture part of a platform string (`x86_64` of `x86_64-linux`).
+fn arch(platform: &str) -> &str {
+    platform.split('-').next().unwrap_or_default()
+}
+
+#[test]
+fn an_x86_64_golden_on_an_x86_64_machine_is_judged_by_its_bits() {
+    // Issue 39: goldens made on Intel reproduce bit for bit on AMD and back, and a rule that judged them by
+    // the tolerance across CPU models hid a change of every irradiance-caching image. The project's goldens
+    // name their platform, and on the same architecture (and system) the rule is bits, whatever CPU model
+    // made them or checks them.
+    let m = manifest();
+    let here = golden::platform();
+    for e in &m.entries {
+        assert_eq!(arch(&e.recorded.platform), "x86_64", "{}: made on {}", e.name, e.recorded.platform);
+        assert!(!e.recorded.commit.ends_with("-dirty"), "{}: recorded from uncommitted code", e.name);
+        if arch(&here) == "x86_64" {
+            assert_eq!(golden::rule(&e.recorded.platform, &here, false), Rule::Bits, "{} on {here}", e.name);
+        }
+    }
+    for (made, cpu) in [("x86_64-linux", "Intel(R) Xeon(R) Platinum 8488C"), ("x86_64-linux", "AMD EPYC 9R14")] {
+        assert_eq!(golden::rule(made, "x86_64-linux", false), Rule::Bits, "{cpu}");
+    }
 }
 
 /// pbrt-v3's image of a per-pixel golden, from tests/data/pbrt-v3/golden (made by its make.sh), and the
@@ -107,18 +139,28 @@ fn per_pixel_goldens_match_pbrt_v3() {
     }
 }
 
-/// The largest error of a cache-based golden against its own `none` golden, per application: RMSE relative
-/// to the mean of `none`, and mean HDR-FLIP. Measured when the goldens were made (64×48, 500 caches, the
-/// applications' QUICK settings; VGC's σ_a from the cache density) the largest were, over both scenes and
-/// every placement: cache AO 0.078 / 0.051, irradiance caching 0.38 / 0.175 (the spheres' indirect light is
-/// dim and varies fast: 0.08 / 0.057 on the room), importance caching 0.052 / 0.033 (the noise of its eight
-/// draws per technique; 0.16 / 0.087 when it drew one), and the means within 3.8 %. The bounds leave room
-/// for 1.3–1.5× those; a golden that is silently wrong by a visible amount exceeds them.
-fn bound(application: &str) -> Option<(f64, f64)> {
-    match application {
-        "cacheao" => Some((0.12, 0.075)),
-        "irradiancecache" => Some((0.55, 0.23)),
-        "importancecache" => Some((0.075, 0.045)),
+/// The largest error of a cache-based golden against its own `none` golden, per application and scene:
+/// RMSE relative to the mean of `none`, mean HDR-FLIP, and the relative difference of the means. Each bound
+/// is about 1.5× the largest measured over the eight placements when the goldens were re-recorded at the
+/// code of issue 39 (64×48, 500 caches, the applications' QUICK settings; VGC's σ_a from the cache
+/// density); the measured figures are in the comments, placement in brackets. A golden that is silently
+/// wrong by a visible amount exceeds them. The spheres' indirect light is dim and varies fast, so their
+/// irradiance-caching bound stays near the old 0.55.
+fn bound(application: &str, scene: &str) -> Option<(f64, f64, f64)> {
+    match (application, scene) {
+        // 0.0679 (vgc+dgs:geom), 0.0365 (im), 2.44 % (vgc+dgs:geom)
+        ("cacheao", "spheres") => Some((0.10, 0.055, 0.037)),
+        // 0.0777 (im), 0.0505 (vgc+dgs:diff), 1.38 % (vgc+dgs:diff)
+        ("cacheao", "room") => Some((0.12, 0.076, 0.021)),
+        // 0.3707 (im), 0.1763 (vgc+dgs:geom), 3.23 % (vgc+dgs:geom)
+        ("irradiancecache", "spheres") => Some((0.56, 0.27, 0.049)),
+        // 0.0705 (im), 0.0572 (im), 0.67 % (vgc+dgs:geom)
+        ("irradiancecache", "room") => Some((0.106, 0.086, 0.010)),
+        // 0.0165 (vgc+dgs:geom), 0.0078 (sd), 0.02 % (im): the means agree to the noise of a 64×48
+        // image's mean, so their bound is a floor of 0.25 %, not 1.5× that.
+        ("importancecache", "spheres") => Some((0.025, 0.012, 0.0025)),
+        // 0.0513 (im), 0.0320 (sd), 0.14 % (sd+as); the same floor for the mean
+        ("importancecache", "room") => Some((0.077, 0.048, 0.0025)),
         _ => None,
     }
 }
@@ -135,8 +177,9 @@ fn cache_goldens_are_near_their_own_per_sample_reference() {
     let m = manifest();
     let mut report = Vec::new();
     for app in APPLICATIONS {
-        let (max_rel, max_flip) = bound(app.name).unwrap_or_else(|| panic!("state a golden bound for {}", app.name));
         for scene in matrix::SCENES {
+            let (max_rel, max_flip, max_dmean) =
+                bound(app.name, scene).unwrap_or_else(|| panic!("state a golden bound for {} on {scene}", app.name));
             let none = golden_image(&m, &matrix::name(scene, app.name, Some("none")));
             for p in NAMES {
                 let name = matrix::name(scene, app.name, Some(p));
@@ -144,7 +187,7 @@ fn cache_goldens_are_near_their_own_per_sample_reference() {
                 report.push(format!("{name}: rel. RMSE {rel:.4}, FLIP {flip:.4}, mean {:+.2} %", 100.0 * dmean));
                 assert!(rel <= max_rel && flip <= max_flip, "{name}: rel. RMSE {rel} FLIP {flip} vs none");
                 // The caches interpolate the same estimator: the mean moves by less than the error spreads.
-                assert!(dmean <= 0.05, "{name}: mean {:.2} % off none", 100.0 * dmean);
+                assert!(dmean <= max_dmean, "{name}: mean {:.2} % off none", 100.0 * dmean);
             }
         }
     }
@@ -167,7 +210,9 @@ fn the_per_sample_references_of_irradiance_caching_agree_with_pbrt_v3() {
         "room indirect: irradiancecache none {ours:.5}, pbrt-v3 path − directlighting {indirect:.5} ({:+.2} %)",
         100.0 * dev
     );
-    assert!(dev.abs() <= 0.03, "{dev}");
+    // Measured at the goldens of issue 39: −0.21 %; the bound is about twice that, the pbrt-v3 references'
+    // own noise in the mean being of that order.
+    assert!(dev.abs() <= 0.005, "{dev}");
 }
 
 #[test]
@@ -175,13 +220,14 @@ fn the_per_sample_reference_of_importance_caching_agrees_with_pbrt_v3_in_the_mea
     // Importance caching's reference sums all VPLs of one set of light paths (1024 here, from a fixed
     // vplseed) with each VPL's contribution clamped at the distance d_c: it estimates pbrt-v3's `path`
     // (maxdepth 5) up to that one set's error and the energy the clamp removes (the clamp only lowers the
-    // image). Measured when the goldens were made: −2.1 % on the room.
+    // image). Measured at the goldens of issue 39: −2.08 % on the room; the band is 1.5× that below and no
+    // gain above (the clamp cannot add light, and the one VPL set is fixed by the vplseed).
     let m = manifest();
     let path = mean(&image::read(&root().join("tests/data/pbrt-v3/golden/path-room.pfm")).unwrap());
     let ours = mean(&golden_image(&m, "room.importancecache.none"));
     let dev = (ours - path) / path;
     eprintln!("room: importancecache none {ours:.5}, pbrt-v3 path {path:.5} ({:+.2} %)", 100.0 * dev);
-    assert!((-0.05..=0.01).contains(&dev), "{dev}");
+    assert!((-0.031..=0.0).contains(&dev), "{dev}");
 }
 
 /// Runs the `cachert` binary with `args`, the environment variable CI set or not.
@@ -204,8 +250,10 @@ fn a_user_folder_is_made_checked_broken_and_updated_through_the_command() {
     let scene = root().join("scenes/spheres.pbrt");
     let (d, s) = (dir.path("g"), scene.to_str().unwrap().to_string());
     let d = d.to_str().unwrap();
+    // `--allow-dirty`: this test runs on developers' trees with uncommitted changes too; the refusal itself is
+    // src/golden/provenance.rs's test.
     let add = |name: &str, extra: &[&str], ci: bool| {
-        let mut a = vec!["golden", "add", "--dir", d, "--name", name, &s, "--resolution", "16x12"];
+        let mut a = vec!["golden", "add", "--allow-dirty", "--dir", d, "--name", name, &s, "--resolution", "16x12"];
         a.extend_from_slice(extra);
         cachert(&a, ci)
     };
@@ -228,7 +276,8 @@ fn a_user_folder_is_made_checked_broken_and_updated_through_the_command() {
     let (code, out, err) = cachert(&["golden", "check", "--dir", d], true);
     assert_eq!(code, 0, "{out}{err}");
     assert!(out.contains("2 goldens: 2 passed (2 identical), 0 failed"), "{out}");
-    assert!(err.contains("PASS identical") && err.contains(" ao") && err.contains(" direct"), "{err}");
+    assert!(out.contains("2 judged bit for bit on") && out.contains("0 within the tolerance"), "{out}");
+    assert!(err.contains("PASS identical bits") && err.contains(" ao") && err.contains(" direct"), "{err}");
 
     // A golden moved by a fraction of a per cent fails on this machine kind, and the list names it.
     let file = dir.path("g").join(&m.get("ao").unwrap().file);
@@ -249,25 +298,34 @@ fn a_user_folder_is_made_checked_broken_and_updated_through_the_command() {
     assert!(code == 2 && err.contains("no golden"), "{err}");
 
     // Update refuses under CI; otherwise it says what moved and by how much, and check passes again.
-    let (code, _, err) = cachert(&["golden", "update", "--dir", d], true);
+    let (code, _, err) = cachert(&["golden", "update", "--allow-dirty", "--dir", d], true);
     assert!(code == 2 && err.contains("CI"), "{err}");
-    let (code, out, err) = cachert(&["golden", "update", "--dir", d], false);
+    let (code, out, err) = cachert(&["golden", "update", "--allow-dirty", "--dir", d], false);
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("ao: moved: RMSE") && err.contains("direct: unchanged (identical)"), "{err}");
     assert!(out.contains("updated 2 goldens"), "{out}");
     assert_eq!(cachert(&["golden", "check", "--dir", d], true).0, 0);
 
-    // A golden made on another machine kind passes within the tolerance, not by bits alone.
-    let text = std::fs::read_to_string(dir.path("g/MANIFEST.json")).unwrap();
-    let machine = golden::machine_kind();
-    std::fs::write(dir.path("g/MANIFEST.json"), text.replace(&machine, "riscv64-linux, another CPU")).unwrap();
+    // A golden one unit in the last place off fails by its bits; `--tolerance` asks for the tolerance on
+    // purpose, and each line says which rule judged it.
     let mut im = image::read(&file).unwrap();
     im.pixels[lit][0] = f32::from_bits(im.pixels[lit][0].to_bits() + 1);
     image::write(&im, &file).unwrap();
+    let (code, out, _) = cachert(&["golden", "check", "--dir", d], true);
+    assert!(code == 1 && out.contains("FAIL           bits"), "{out}");
+    let (code, out, err) = cachert(&["golden", "check", "--tolerance", "--dir", d], true);
+    assert!(code == 0 && out.contains("0 judged bit for bit") && out.contains("2 within the tolerance"), "{out}");
+    assert!(err.contains("PASS within    tol.") && err.contains("[judged within the tolerance (asked"), "{err}");
+    // A golden made on another platform passes within the tolerance, not by bits alone, and says why.
+    let text = std::fs::read_to_string(dir.path("g/MANIFEST.json")).unwrap();
+    let ours = format!("\"platform\": \"{}\"", golden::platform());
+    assert!(text.contains(&ours), "{text}");
+    std::fs::write(dir.path("g/MANIFEST.json"), text.replace(&ours, "\"platform\": \"riscv64-linux\"")).unwrap();
     let (code, out, err) = cachert(&["golden", "check", "--dir", d], true);
     assert_eq!(code, 0, "{out}");
     assert!(err.contains("PASS within") && err.contains("PASS identical"), "{err}");
-    let outcomes = golden::check(Path::new(d), Some("ao"), Some(1), &mut |_| {}).unwrap();
+    assert!(err.contains("[judged within the tolerance (made on riscv64-linux)]"), "{err}");
+    let outcomes = golden::check(Path::new(d), Some("ao"), Some(1), false, &mut |_| {}).unwrap();
     assert_eq!(outcomes[0].verdict, Verdict::Within);
 
     // A broken manifest is an error naming the file; a missing folder too.

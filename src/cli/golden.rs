@@ -34,10 +34,20 @@ pub struct Common {
 /// `golden` actions.
 #[derive(clap::Subcommand, Debug, Clone)]
 pub enum Action {
-    /// Re-render every golden and compare: bit for bit on the machine kind it was made on, else within
-    /// relative RMSE 1e-4 and HDR-FLIP 0.005. Exit status 1 when any fails.
-    Check(Common),
-    /// Re-render goldens and rewrite them and the manifest, printing what moved (refused when CI is set).
+    /// Re-render every golden and compare: bit for bit on the platform it was made on (architecture and
+    /// system, e.g. x86_64-linux, whatever the CPU model), else within relative RMSE 1e-4 and HDR-FLIP
+    /// 0.005; each line names its rule. Exit status 1 when any fails.
+    Check {
+        /// Folder, filter, threads.
+        #[command(flatten)]
+        common: Common,
+        /// Judge every golden by the tolerance, even one made on this platform (e.g. for a build with other
+        /// compiler flags); each line says so.
+        #[arg(long)]
+        tolerance: bool,
+    },
+    /// Re-render goldens and rewrite them and the manifest, printing what moved (refused when CI is set,
+    /// and when src/, Cargo.toml or Cargo.lock have uncommitted changes unless --allow-dirty).
     Update {
         /// Folder, filter, threads.
         #[command(flatten)]
@@ -46,6 +56,9 @@ pub enum Action {
         /// the per-pixel integrators) missing from the manifest; for the repository's golden/ folder.
         #[arg(long)]
         matrix: bool,
+        /// Record even from code with uncommitted changes (warned about; the commit is marked -dirty).
+        #[arg(long)]
+        allow_dirty: bool,
     },
     /// Render a scene and add it as a new golden (refused when CI is set).
     Add(AddArgs),
@@ -86,17 +99,22 @@ pub struct AddArgs {
     /// Worker threads.
     #[arg(long)]
     pub nthreads: Option<usize>,
+    /// Record even from code with uncommitted changes (warned about; the commit is marked -dirty).
+    #[arg(long)]
+    pub allow_dirty: bool,
 }
 
 /// Runs a `golden` action, printing progress lines to stderr.
 pub fn run(a: &GoldenArgs) -> Result<Done> {
     match &a.action {
-        Action::Check(c) => {
-            let outcomes = golden::check(&c.dir, c.filter.as_deref(), c.nthreads, &mut |o| eprintln!("{}", o.line()))?;
+        Action::Check { common: c, tolerance } => {
+            let log = &mut |o: &golden::Outcome| eprintln!("{}", o.line());
+            let outcomes = golden::check(&c.dir, c.filter.as_deref(), c.nthreads, *tolerance, log)?;
             Ok(summary(&outcomes))
         }
-        Action::Update { common: c, matrix } => {
-            let lines = golden::update(&c.dir, c.filter.as_deref(), *matrix, c.nthreads, &mut |l| eprintln!("{l}"))?;
+        Action::Update { common: c, matrix, allow_dirty } => {
+            let log = &mut |l: &str| eprintln!("{l}");
+            let lines = golden::update(&c.dir, c.filter.as_deref(), *matrix, c.nthreads, *allow_dirty, log)?;
             let moved = lines.iter().filter(|l| l.contains(": moved") || l.contains(": new")).count();
             Ok(Done {
                 text: format!("updated {} goldens in {} ({moved} new or moved)", lines.len(), c.dir.display()),
@@ -112,11 +130,15 @@ fn summary(outcomes: &[golden::Outcome]) -> Done {
     let failed: Vec<&golden::Outcome> = outcomes.iter().filter(|o| !o.verdict.passed()).collect();
     let identical = outcomes.iter().filter(|o| o.verdict == golden::Verdict::Identical).count();
     let secs: f64 = outcomes.iter().map(|o| o.secs).sum();
+    let bits = outcomes.iter().filter(|o| o.rule == golden::Rule::Bits).count();
     let mut text = format!(
-        "{} goldens: {} passed ({identical} identical), {} failed, {secs:.1} s",
+        "{} goldens: {} passed ({identical} identical), {} failed, {secs:.1} s; {bits} judged bit for bit on {}, \
+         {} within the tolerance",
         outcomes.len(),
         outcomes.len() - failed.len(),
-        failed.len()
+        failed.len(),
+        golden::platform(),
+        outcomes.len() - bits
     );
     if !failed.is_empty() {
         text.push_str("\nfailed:");
@@ -152,7 +174,7 @@ fn add(a: &AddArgs) -> Result<Done> {
         seed: a.seed,
         set,
     };
-    let e = golden::check::add(&a.dir, &name, spec, a.nthreads)?;
+    let e = golden::check::add(&a.dir, &name, spec, a.nthreads, a.allow_dirty, &mut |l| eprintln!("{l}"))?;
     Ok(Done {
         text: format!("added golden \"{}\" ({}, {:.2} s) to {}", e.name, e.file, e.recorded.secs, a.dir.display()),
         passed: true,

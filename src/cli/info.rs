@@ -1,5 +1,7 @@
 //! `cachert info`: what a scene file loads to — shapes, triangles, instances, lights, materials, bounds,
-//! warnings and the time each loading stage took.
+//! warnings and the time each loading stage took. The warnings are those of loading and of the shading
+//! set-up (textures, materials, lights) that every shading integrator builds before its first pixel: an
+//! unsupported material rendered as matte, an unreadable environment map, a zero-power light.
 
 use std::fmt::Write;
 use std::path::PathBuf;
@@ -16,7 +18,8 @@ pub struct InfoArgs {
 
 /// Runs `cachert info` and returns the report.
 pub fn run(args: &InfoArgs) -> Result<String> {
-    let l = load(&args.scene, LoadOptions::default())?;
+    let mut l = load(&args.scene, LoadOptions::default())?;
+    shading_warnings(&l.scene, &mut l.warnings)?;
     let (s, st) = (&l.scene, &l.stats);
     let mut o = String::new();
     let _ = writeln!(o, "scene       {}", s.source.display());
@@ -82,6 +85,15 @@ pub fn run(args: &InfoArgs) -> Result<String> {
         let _ = writeln!(o, "  {w}");
     }
     Ok(o)
+}
+
+/// Builds the scene's textures, materials and lights as a shading integrator does, for their warnings (and
+/// their errors: a value that render refuses, info refuses too).
+fn shading_warnings(scene: &crate::scene::Scene, warnings: &mut crate::error::Warnings) -> Result<()> {
+    crate::shading::texture::Textures::build(scene, warnings)?;
+    crate::shading::material::Materials::build(scene, warnings)?;
+    crate::shading::light::Lights::build(scene, warnings)?;
+    Ok(())
 }
 
 fn instance_triangles(s: &crate::scene::Scene) -> usize {

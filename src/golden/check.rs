@@ -14,7 +14,8 @@ use crate::render::{RenderSettings, render};
 use crate::scene::{LoadOptions, load};
 
 use super::manifest::{Entry, Manifest, Recorded, Spec, file_name, resolve};
-use super::{FLIP_TOLERANCE, REL_RMSE_TOLERANCE, machine_kind, matches, matrix};
+use super::provenance::{self, Provenance};
+use super::{FLIP_TOLERANCE, REL_RMSE_TOLERANCE, Rule, machine_kind, matches, matrix, platform, rule};
 
 /// A rendered spec.
 #[derive(Clone, Debug)]
@@ -56,7 +57,7 @@ pub fn render_spec(dir: &Path, spec: &Spec, threads: Option<usize>) -> Result<Re
 pub enum Verdict {
     /// The same bits.
     Identical,
-    /// Not the same bits, within the cross-machine tolerances (only on another machine kind).
+    /// Not the same bits, within the tolerances (only under [`Rule::Tolerance`]).
     Within,
     /// Neither; the reason.
     Failed(String),
@@ -76,6 +77,8 @@ pub struct Outcome {
     pub name: String,
     /// Pass or fail.
     pub verdict: Verdict,
+    /// The rule it was judged by.
+    pub rule: Rule,
     /// RMSE against the golden (NaN when not compared).
     pub rmse: f64,
     /// The same relative to the golden's mean.
@@ -87,15 +90,20 @@ pub struct Outcome {
 }
 
 impl Outcome {
-    /// One line of the report: verdict, time, errors, name, and the reason of a failure.
+    /// One line of the report: verdict, the rule (`bits` or `tol.`), time, errors, name, and the reason of
+    /// a failure or of a tolerance.
     pub fn line(&self) -> String {
         let (tag, why) = match &self.verdict {
             Verdict::Identical => ("PASS identical", String::new()),
             Verdict::Within => ("PASS within   ", String::new()),
             Verdict::Failed(r) => ("FAIL          ", format!(": {r}")),
         };
+        let (rule, lenience) = match &self.rule {
+            Rule::Bits => ("bits", String::new()),
+            r => ("tol.", format!(" [judged {}]", r.describe())),
+        };
         format!(
-            "{tag} {:>7.2} s  RMSE {:<9.3e} rel. {:<9.3e} FLIP {:<9.3e} {}{why}",
+            "{tag} {rule} {:>7.2} s  RMSE {:<9.3e} rel. {:<9.3e} FLIP {:<9.3e} {}{why}{lenience}",
             self.secs, self.rmse, self.rel_rmse, self.flip, self.name
         )
     }
@@ -125,9 +133,9 @@ impl Errors {
     const NAN: Errors = Errors { rmse: f64::NAN, rel_rmse: f64::NAN, flip: f64::NAN };
 }
 
-/// Compares a re-render with its golden. Bit-identical passes; otherwise a golden made on this machine
-/// kind fails, and one made on another passes within [`REL_RMSE_TOLERANCE`] and [`FLIP_TOLERANCE`].
-pub fn judge(test: &Image, golden: &Image, same_machine: bool) -> (Verdict, Errors) {
+/// Compares a re-render with its golden. Bit-identical passes; otherwise under [`Rule::Bits`] it fails, and
+/// under [`Rule::Tolerance`] it passes within [`REL_RMSE_TOLERANCE`] and [`FLIP_TOLERANCE`].
+pub fn judge(test: &Image, golden: &Image, rule: &Rule) -> (Verdict, Errors) {
     if (test.width, test.height) != (golden.width, golden.height) {
         let why =
             format!("the render is {}×{}, the golden {}×{}", test.width, test.height, golden.width, golden.height);
@@ -142,12 +150,10 @@ pub fn judge(test: &Image, golden: &Image, same_machine: bool) -> (Verdict, Erro
         Err(err) => return (Verdict::Failed(err.to_string()), Errors::NAN),
     };
     let (rel, flip) = (e.rel_rmse, e.flip);
-    let verdict = if same_machine {
-        Verdict::Failed("not bit-identical on the machine kind the golden was made on".into())
+    let verdict = if *rule == Rule::Bits {
+        Verdict::Failed("not bit-identical on the platform the golden was made on".into())
     } else if !(rel <= REL_RMSE_TOLERANCE && flip <= FLIP_TOLERANCE) {
-        Verdict::Failed(format!(
-            "beyond the cross-machine tolerance (relative RMSE {REL_RMSE_TOLERANCE:e}, FLIP {FLIP_TOLERANCE})"
-        ))
+        Verdict::Failed(format!("beyond the tolerance (relative RMSE {REL_RMSE_TOLERANCE:e}, FLIP {FLIP_TOLERANCE})"))
     } else {
         Verdict::Within
     };
@@ -166,27 +172,30 @@ fn select<'m>(m: &'m Manifest, filter: Option<&str>, dir: &Path) -> Result<Vec<&
     Ok(chosen)
 }
 
-/// Re-renders every entry of `dir`'s manifest matching `filter` and compares it with its golden, calling
-/// `log` with each outcome as it comes. A render or read failure is a failed outcome, not an error; errors
-/// are for a missing or malformed manifest and a filter that matches nothing.
+/// Re-renders every entry of `dir`'s manifest matching `filter` and compares it with its golden by the
+/// entry's [`rule`] (`tolerance`: every entry by the tolerance, on purpose), calling `log` with each outcome
+/// as it comes. A render or read failure is a failed outcome, not an error; errors are for a missing or
+/// malformed manifest and a filter that matches nothing.
 pub fn check(
     dir: &Path,
     filter: Option<&str>,
     threads: Option<usize>,
+    tolerance: bool,
     log: &mut dyn FnMut(&Outcome),
 ) -> Result<Vec<Outcome>> {
     let m = Manifest::read(dir, false)?;
-    let here = machine_kind();
+    let here = platform();
     let mut out = Vec::new();
     for e in select(&m, filter, dir)? {
+        let rule = rule(&e.recorded.platform, &here, tolerance);
         let golden = crate::image::read(&resolve(dir, &e.file));
         let outcome = match (render_spec(dir, &e.spec, threads), golden) {
-            (Err(err), _) => failed(e, format!("cannot render: {err}"), 0.0),
-            (Ok(r), Err(err)) => failed(e, format!("cannot read the golden: {err}"), r.secs),
+            (Err(err), _) => failed(e, rule, format!("cannot render: {err}"), 0.0),
+            (Ok(r), Err(err)) => failed(e, rule, format!("cannot read the golden: {err}"), r.secs),
             (Ok(r), Ok(g)) => {
-                let (verdict, err) = judge(&r.image, &g, e.recorded.machine == here);
+                let (verdict, err) = judge(&r.image, &g, &rule);
                 let Errors { rmse, rel_rmse, flip } = err;
-                Outcome { name: e.name.clone(), verdict, rmse, rel_rmse, flip, secs: r.secs }
+                Outcome { name: e.name.clone(), verdict, rule, rmse, rel_rmse, flip, secs: r.secs }
             }
         };
         log(&outcome);
@@ -195,9 +204,9 @@ pub fn check(
     Ok(out)
 }
 
-fn failed(e: &Entry, why: String, secs: f64) -> Outcome {
+fn failed(e: &Entry, rule: Rule, why: String, secs: f64) -> Outcome {
     let Errors { rmse, rel_rmse, flip } = Errors::NAN;
-    Outcome { name: e.name.clone(), verdict: Verdict::Failed(why), rmse, rel_rmse, flip, secs }
+    Outcome { name: e.name.clone(), verdict: Verdict::Failed(why), rule, rmse, rel_rmse, flip, secs }
 }
 
 /// Refuses under continuous integration: goldens move only by an explicit command on a developer's
@@ -212,19 +221,28 @@ fn refuse_under_ci(what: &str) -> Result<()> {
     Ok(())
 }
 
-/// The commit of the code in `dir`'s repository (`git describe --always --dirty`), or `unknown`.
-fn commit(dir: &Path) -> String {
-    std::process::Command::new("git")
-        .arg("-C")
-        .arg(dir)
-        .args(["describe", "--always", "--dirty", "--abbrev=12"])
-        .output()
-        .ok()
-        .filter(|o| o.status.success())
-        .and_then(|o| String::from_utf8(o.stdout).ok())
-        .map(|s| s.trim().to_string())
-        .filter(|s| !s.is_empty())
-        .unwrap_or_else(|| "unknown".to_string())
+/// The commit to record for goldens made now: refused when the code this binary was built from has
+/// uncommitted changes, unless `allow_dirty` (then a loud warning, and the commit ends in `-dirty`).
+fn recorded_commit(allow_dirty: bool, what: &str, log: &mut dyn FnMut(&str)) -> Result<String> {
+    let p = provenance::of_this_build();
+    if let Provenance::Dirty(commit, files) = &p {
+        let list = files.iter().take(8).map(|f| format!("\n  {f}")).collect::<String>();
+        let more = if files.len() > 8 { format!("\n  … and {} more", files.len() - 8) } else { String::new() };
+        if !allow_dirty {
+            return Err(Error::usage(format!(
+                "golden {what} refuses to record from code with uncommitted changes (commit {commit}, {}):{list}{more}\n\
+                 commit them first, so that each golden names code that can be checked out, or pass \
+                 --allow-dirty to record them marked \"{commit}-dirty\"",
+                provenance::CODE_PATHS.join(", ")
+            )));
+        }
+        log(&format!(
+            "WARNING: recording goldens from code with uncommitted changes; they are marked \"{}\" and no \
+             one can check out the code that made them:{list}{more}",
+            p.commit()
+        ));
+    }
+    Ok(p.commit())
 }
 
 /// Renders `spec`, writes its image to `dir/file` and returns what to record.
@@ -236,6 +254,7 @@ fn make(dir: &Path, file: &str, spec: &Spec, threads: Option<usize>, commit: &st
     crate::image::write(&r.image, &resolve(dir, file))?;
     let recorded = Recorded {
         commit: commit.to_string(),
+        platform: platform(),
         machine: machine_kind(),
         mean: r.image.mean(),
         secs: r.secs,
@@ -247,21 +266,25 @@ fn make(dir: &Path, file: &str, spec: &Spec, threads: Option<usize>, commit: &st
 /// Re-renders and rewrites the entries of `dir` matching `filter`, writing the manifest after each, and
 /// returns one line per entry saying what moved and by how much. With `matrix`, entries of the project's
 /// matrix ([`matrix::entries`]) missing from the manifest are added first (those matching `filter`).
-/// Refuses when the environment variable `CI` is set.
+/// Refuses when the environment variable `CI` is set, and when the code has uncommitted changes unless
+/// `allow_dirty` (see [`provenance`]).
 pub fn update(
     dir: &Path,
     filter: Option<&str>,
     with_matrix: bool,
     threads: Option<usize>,
+    allow_dirty: bool,
     log: &mut dyn FnMut(&str),
 ) -> Result<Vec<String>> {
     refuse_under_ci("update")?;
+    let commit = recorded_commit(allow_dirty, "update", log)?;
     let mut m = Manifest::read(dir, with_matrix)?;
     if with_matrix {
         for (name, spec) in matrix::entries() {
             if m.get(&name).is_none() && filter.is_none_or(|f| matches(&name, f)) {
                 let recorded = Recorded {
                     commit: String::new(),
+                    platform: String::new(),
                     machine: String::new(),
                     mean: [0.0; 3],
                     secs: 0.0,
@@ -273,7 +296,6 @@ pub fn update(
     }
     std::fs::create_dir_all(dir).map_err(|e| Error::file(dir, format!("cannot create the golden folder: {e}")))?;
     let names: Vec<String> = select(&m, filter, dir)?.iter().map(|e| e.name.clone()).collect();
-    let commit = commit(dir);
     let mut lines = Vec::new();
     for name in names {
         let i = m.entries.iter().position(|e| e.name == name).expect("selected from this manifest");
@@ -282,7 +304,7 @@ pub fn update(
         let (recorded, image) = make(dir, &e.file, &e.spec, threads, &commit).map_err(|err| in_entry(&name, err))?;
         let what = match old {
             None => "new".to_string(),
-            Some(old) => match judge(&image, &old, false) {
+            Some(old) => match judge(&image, &old, &Rule::Bits) {
                 (Verdict::Identical, _) => "unchanged (identical)".to_string(),
                 (_, Errors { rmse, rel_rmse, flip }) => format!(
                     "moved: RMSE {rmse:.3e} (relative {rel_rmse:.3e}), FLIP {flip:.3e}, mean {:.6} → {:.6}",
@@ -301,8 +323,16 @@ pub fn update(
 }
 
 /// Adds a golden named `name` rendered from `spec` to `dir` (creating the folder and manifest), refusing a
-/// name already there and refusing under `CI`. Returns the entry.
-pub fn add(dir: &Path, name: &str, spec: Spec, threads: Option<usize>) -> Result<Entry> {
+/// name already there, refusing under `CI`, and refusing code with uncommitted changes unless
+/// `allow_dirty` (the warning goes to `log`). Returns the entry.
+pub fn add(
+    dir: &Path,
+    name: &str,
+    spec: Spec,
+    threads: Option<usize>,
+    allow_dirty: bool,
+    log: &mut dyn FnMut(&str),
+) -> Result<Entry> {
     refuse_under_ci("add")?;
     let mut m = Manifest::read(dir, true)?;
     if name.is_empty() || m.get(name).is_some() {
@@ -312,8 +342,9 @@ pub fn add(dir: &Path, name: &str, spec: Spec, threads: Option<usize>) -> Result
         )));
     }
     std::fs::create_dir_all(dir).map_err(|e| Error::file(dir, format!("cannot create the golden folder: {e}")))?;
+    let commit = recorded_commit(allow_dirty, "add", log)?;
     let file = file_name(name);
-    let (recorded, _) = make(dir, &file, &spec, threads, &commit(dir)).map_err(|err| in_entry(name, err))?;
+    let (recorded, _) = make(dir, &file, &spec, threads, &commit).map_err(|err| in_entry(name, err))?;
     let entry = Entry { name: name.to_string(), file, spec, recorded };
     m.entries.push(entry.clone());
     m.write(dir)?;
@@ -341,20 +372,21 @@ mod tests {
     }
 
     #[test]
-    fn judging_asks_for_identical_bits_on_the_same_machine_and_tolerance_elsewhere() {
+    fn judging_asks_for_identical_bits_by_the_bit_rule_and_the_tolerance_otherwise() {
         let g = image(1.0);
-        assert_eq!(judge(&g, &g, true).0, Verdict::Identical);
+        let tol = Rule::Tolerance(super::super::Lenience::Asked);
+        assert_eq!(judge(&g, &g, &Rule::Bits).0, Verdict::Identical);
         let mut near = g.clone();
-        near.pixels[0][0] = 1.0 + 1e-6;
-        assert!(matches!(judge(&near, &g, true).0, Verdict::Failed(_)));
-        let (v, e) = judge(&near, &g, false);
+        near.pixels[0][0] = f32::from_bits(1.0f32.to_bits() + 1);
+        assert!(matches!(judge(&near, &g, &Rule::Bits).0, Verdict::Failed(_)));
+        let (v, e) = judge(&near, &g, &tol);
         assert_eq!(v, Verdict::Within, "{e:?}");
-        let (v, e) = judge(&image(1.01), &g, false);
+        let (v, e) = judge(&image(1.01), &g, &tol);
         assert!(matches!(v, Verdict::Failed(_)) && (e.rel_rmse - 0.01).abs() < 1e-4, "{v:?} {e:?}");
         let small = Image::from_pixels(2, 2, vec![[1.0; 3]; 4]).unwrap();
-        assert!(matches!(judge(&small, &g, false).0, Verdict::Failed(ref r) if r.contains("4×3")));
+        assert!(matches!(judge(&small, &g, &tol).0, Verdict::Failed(ref r) if r.contains("4×3")));
         let mut nan = g.clone();
         nan.pixels[3][1] = f32::NAN;
-        assert!(!judge(&nan, &g, false).0.passed());
+        assert!(!judge(&nan, &g, &tol).0.passed());
     }
 }

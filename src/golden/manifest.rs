@@ -1,5 +1,5 @@
 //! `MANIFEST.json` of a golden folder: for each golden image, the inputs that render it ([`Spec`]) and what
-//! was recorded when it was made ([`Recorded`]: commit, machine kind, mean, every resolved setting).
+//! was recorded when it was made ([`Recorded`]: commit, platform, machine, mean, every resolved setting).
 //!
 //! Paths in the manifest are relative to its folder, so the folder can move with the scenes it names.
 //!
@@ -15,8 +15,9 @@ use crate::error::{Error, Result};
 /// The manifest's file name inside a golden folder.
 pub const MANIFEST: &str = "MANIFEST.json";
 
-/// Version of the manifest format this build reads and writes.
-pub const FORMAT: u32 = 1;
+/// Version of the manifest format this build writes. Format 1 had no [`Recorded::platform`]; this build
+/// reads it too, taking the platform from the front of the machine string (`x86_64-linux, AMD EPYC`).
+pub const FORMAT: u32 = 2;
 
 /// How to render one golden: what `cachert render` would be given.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -51,7 +52,12 @@ pub struct Spec {
 pub struct Recorded {
     /// The commit of the code that rendered it (`git describe --always --dirty`, or `unknown`).
     pub commit: String,
-    /// The machine kind it was rendered on ([`super::machine_kind`]).
+    /// The platform it was rendered on ([`super::platform`]: architecture and system, `x86_64-linux`):
+    /// what decides whether a re-render must be bit-identical. Empty in a format-1 manifest until read.
+    #[serde(default)]
+    pub platform: String,
+    /// The machine it was rendered on ([`super::machine_kind`]: platform and CPU model), for the record
+    /// only: the CPU model does not change an image.
     pub machine: String,
     /// Mean of each channel.
     pub mean: [f64; 3],
@@ -101,12 +107,18 @@ impl Manifest {
             Err(e) if allow_missing && e.kind() == std::io::ErrorKind::NotFound => return Ok(Manifest::default()),
             Err(e) => return Err(Error::file(&path, format!("cannot read the golden manifest: {e}"))),
         };
-        let m: Manifest = serde_json::from_str(&text).map_err(|e| {
+        let mut m: Manifest = serde_json::from_str(&text).map_err(|e| {
             Error::file(&path, format!("line {}, column {}: not a golden manifest: {e}", e.line(), e.column()))
         })?;
-        if m.format != FORMAT {
-            return Err(Error::file(&path, format!("manifest format {} (this build reads {FORMAT})", m.format)));
+        if m.format != FORMAT && m.format != 1 {
+            return Err(Error::file(&path, format!("manifest format {} (this build reads 1 and {FORMAT})", m.format)));
         }
+        for e in &mut m.entries {
+            if e.recorded.platform.is_empty() {
+                e.recorded.platform = platform_of_machine(&e.recorded.machine);
+            }
+        }
+        m.format = FORMAT;
         m.validate().map_err(|msg| Error::file(&path, msg))?;
         Ok(m)
     }
@@ -143,6 +155,11 @@ impl Manifest {
     }
 }
 
+/// The platform part of a [`super::machine_kind`] string: what comes before its first `, `.
+fn platform_of_machine(machine: &str) -> String {
+    machine.split(", ").next().unwrap_or_default().to_string()
+}
+
 /// `path` relative to the manifest folder `dir` (absolute paths stay as they are).
 pub fn resolve(dir: &Path, path: &str) -> PathBuf {
     let p = Path::new(path);
@@ -177,6 +194,7 @@ mod tests {
             },
             recorded: Recorded {
                 commit: "abc".into(),
+                platform: "p".into(),
                 machine: "m".into(),
                 mean: [1.0, 2.0, 3.0],
                 secs: 0.5,
@@ -202,6 +220,22 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
         assert!(Manifest::read(&dir, true).unwrap().entries.is_empty());
         assert!(Manifest::read(&dir, false).unwrap_err().to_string().contains("cannot read"));
+    }
+
+    #[test]
+    fn a_format_1_manifest_takes_its_platform_from_the_machine_string() {
+        let dir = std::env::temp_dir().join(format!("cachert-manifest-v1-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut e = entry("a", "a.exr");
+        e.recorded.machine = "x86_64-linux, Intel(R) Xeon(R) Platinum, 2 cores".into();
+        let mut v = serde_json::to_value(Manifest { format: 1, entries: vec![e] }).unwrap();
+        v["entries"][0]["recorded"].as_object_mut().unwrap().remove("platform");
+        std::fs::write(dir.join(MANIFEST), v.to_string()).unwrap();
+        let m = Manifest::read(&dir, false).unwrap();
+        assert_eq!((m.format, m.entries[0].recorded.platform.as_str()), (FORMAT, "x86_64-linux"));
+        std::fs::write(dir.join(MANIFEST), "{\"format\": 7, \"entries\": []}").unwrap();
+        assert!(Manifest::read(&dir, false).unwrap_err().to_string().contains("manifest format 7"));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
