@@ -276,23 +276,3 @@ mod compare_command {
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
-
-/// The speed figure for the report: `cargo test --release --test metrics -- --ignored --nocapture`
-/// with `RAYON_NUM_THREADS=2`.
-#[test]
-#[ignore = "timing; run explicitly in release mode"]
-fn hdr_flip_full_hd_timing() {
-    let reference = pattern(1920, 1080, 1, 0.0);
-    let test = pattern(1920, 1080, 2, 0.2);
-    let start = std::time::Instant::now();
-    let hdr = flip::hdr_flip_map(&test, &reference, flip::DEFAULT_PPD).unwrap();
-    let seconds = start.elapsed().as_secs_f64();
-    println!(
-        "HDR-FLIP 1920×1080 on {} threads: {seconds:.2} s, {} exposures ({:.3} to {:.3}), mean {:.6}",
-        rayon::current_num_threads(),
-        hdr.exposures.count,
-        hdr.exposures.start,
-        hdr.exposures.stop,
-        hdr.map.mean()
-    );
-}

@@ -37,7 +37,11 @@ const REF_NSAMPLES: u32 = 256;
 
 /// Flags of `cachert bench`.
 #[derive(clap::Args, Debug, Clone)]
+#[command(args_conflicts_with_subcommands = true)]
 pub struct BenchArgs {
+    /// `micro`: benchmarks of single stages instead of the reference scenes.
+    #[command(subcommand)]
+    pub command: Option<BenchCommand>,
     /// Folder holding the reference scenes.
     #[arg(long, default_value = "../shared/scenes")]
     pub scenes: PathBuf,
@@ -84,6 +88,13 @@ pub struct BenchArgs {
     /// different random numbers for their pixels (pbrt-v2 takes no seed; see `irc_peer`), its other rows once.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
     pub seeds: u32,
+}
+
+/// What `cachert bench` can run instead of the reference scenes.
+#[derive(clap::Subcommand, Debug, Clone)]
+pub enum BenchCommand {
+    /// Benchmarks of single stages, one run each: flip, ply, placement, selection, parse (default: all).
+    Micro(super::bench_micro::MicroArgs),
 }
 
 /// The scenes `directlighting` and `path` are timed on (the bench scenes with light sources).
@@ -225,6 +236,9 @@ fn run_pbrt(pbrt: &Path, text: &str, dir: &Path, threads: usize) -> Result<f64> 
 
 /// Runs the benchmark and returns its table (and writes it to `--json`).
 pub fn run(args: &BenchArgs) -> Result<String> {
+    if let Some(BenchCommand::Micro(micro)) = &args.command {
+        return super::bench_micro::run(micro);
+    }
     if !args.scenes.is_dir() {
         return Err(Error::usage(format!("{}: no such folder (pass --scenes)", args.scenes.display())));
     }

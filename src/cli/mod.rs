@@ -2,6 +2,7 @@
 //! can call them; `main.rs` only parses flags, prints and maps errors to exit status 2.
 
 pub mod bench;
+pub mod bench_micro;
 pub mod cache_outputs;
 pub mod compare;
 pub mod experiment;
@@ -29,7 +30,7 @@ pub enum Command {
     Info(info::InfoArgs),
     /// Compare an image with a reference (RMSE, relMSE, HDR-FLIP, LDR-FLIP).
     Compare(compare::CompareArgs),
-    /// Time the pbrt-v3 reference scenes against pbrt-v3's own CPU times.
+    /// Time the pbrt-v3 reference scenes against pbrt-v3's own CPU times (`bench micro`: single stages).
     Bench(bench::BenchArgs),
     /// Sweep placements × budgets × seeds against the per-sample reference (RMSE, HDR-FLIP).
     Experiment(experiment::ExperimentArgs),

@@ -301,36 +301,4 @@ mod tests {
         eprintln!("parsed {} scene files, {directives} directives", files.len());
         assert!(failures.is_empty(), "{}", failures.join("\n"));
     }
-
-    /// Parse speed on a generated 20 MB `trianglemesh` (run with `cargo test --lib parse -- --ignored
-    /// --nocapture`; the test profile is optimised).
-    #[test]
-    #[ignore]
-    fn parse_speed() {
-        let mut text = String::from("WorldBegin\nShape \"trianglemesh\"\n  \"point3 P\" [\n");
-        let mut i = 0u64;
-        while text.len() < 14_000_000 {
-            let v = |k: u64| (k.wrapping_mul(2654435761) % 200_000) as f64 / 1000.0 - 100.0;
-            text.push_str(&format!("    {:.6} {:.6} {:.6}\n", v(i), v(i + 1), v(i + 2)));
-            i += 3;
-        }
-        text.push_str("  ]\n  \"integer indices\" [\n");
-        let n = i / 3;
-        let mut k = 0;
-        while text.len() < 20_000_000 {
-            text.push_str(&format!("    {} {} {}\n", k % n, (k + 1) % n, (k + 2) % n));
-            k += 1;
-        }
-        text.push_str("  ]\nWorldEnd\n");
-        let start = std::time::Instant::now();
-        let ds = parse_str(&text, Path::new("speed.pbrt")).unwrap();
-        let secs = start.elapsed().as_secs_f64();
-        assert_eq!(ds.len(), 3);
-        eprintln!(
-            "parsed {:.1} MB in {:.3} s: {:.1} MB/s",
-            text.len() as f64 / 1e6,
-            secs,
-            text.len() as f64 / 1e6 / secs
-        );
-    }
 }

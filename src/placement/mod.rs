@@ -14,6 +14,7 @@
 //! | [`adaptive`] | AS, neighbour-error insertion after SD or VGC (§4.3, a reconstruction) |
 //! | [`discontinuity`] | DGS, the paper's second stage, Eq. 3–4 (§4.5) |
 //! | [`registry`] | the strategy names |
+//! | [`synthetic`] | analytic G-buffers and a mock oracle, for tests and `cachert bench micro` |
 //! | `points`, `split`, `hierarchy`, `search`, `cluster`, `budget`, `discrete2d` | shared machinery: usable points and Eq. 1 scaling, node splits, the build-once hierarchy and its cut, the log-scale budget search, representatives and exact budgets, common budget cases, the 2-D sampler |
 //!
 //! Every random decision uses `Rng::keyed(seed, stage tag, index)` with the index of a cell, cluster, cache
@@ -25,6 +26,7 @@ pub mod discontinuity;
 pub mod image_uniform;
 pub mod registry;
 pub mod spatial_directional;
+pub mod synthetic;
 pub mod view_guided;
 
 mod budget;
@@ -36,8 +38,6 @@ mod search;
 mod split;
 #[cfg(test)]
 mod test_scenes;
-#[cfg(test)]
-mod timing;
 
 pub use adaptive::AdaptiveSampling;
 pub use discontinuity::Discontinuity;

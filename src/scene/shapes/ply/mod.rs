@@ -656,23 +656,4 @@ mod tests {
         assert_eq!((mesh.positions.len(), mesh.triangle_count()), (89_670, 29_890));
         assert_eq!((mesh.normals.len(), mesh.uvs.len()), (89_670, 89_670));
     }
-
-    /// Speed check, run by hand: `cargo test --release --lib shapes::ply -- --ignored --nocapture`.
-    #[test]
-    #[ignore]
-    fn time_reading_the_bathroom() {
-        let Some(dir) = scene_dir("bitterli-bathroom/models") else {
-            return;
-        };
-        let files = plys_in(&dir);
-        for f in &files {
-            std::fs::read(f).unwrap(); // warm the page cache
-        }
-        for _ in 0..3 {
-            let start = std::time::Instant::now();
-            let triangles: usize =
-                files.iter().map(|f| read_ply(f, &mut Warnings::default()).unwrap().triangle_count()).sum();
-            eprintln!("read {} files, {triangles} triangles in {:.1?}", files.len(), start.elapsed());
-        }
-    }
 }
