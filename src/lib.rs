@@ -18,6 +18,7 @@
 //! | — | [`sampling`] | random streams keyed by pixel, low-discrepancy sequences, warps, frames |
 //! | — | [`image`] | f32 RGB images; EXR, PFM and PNG in and out |
 //! | — | [`metrics`] | RMSE, relMSE, HDR-FLIP |
+//! | — | [`os`] | probes of the system: CPU time, peak and available memory |
 //! | — | [`cli`] | the subcommands of the `cachert` binary |
 //!
 //! Errors from user input are [`error::Error`]s with locations; nothing reachable from a scene file or a flag
@@ -33,6 +34,7 @@ pub mod gbuffer;
 pub mod golden;
 pub mod image;
 pub mod metrics;
+pub mod os;
 pub mod parse;
 pub mod placement;
 pub mod render;

@@ -21,6 +21,7 @@ use serde::Serialize;
 use crate::application::Application;
 use crate::application::irradiance::IrradianceCache;
 use crate::error::{Error, Result, Warnings};
+use crate::os::{children_cpu_secs, process_cpu_secs};
 use crate::render::{RenderSettings, render};
 use crate::scene::{LoadOptions, load_str};
 
@@ -163,32 +164,6 @@ pub struct BenchRow {
     pub cpu_s_runs: Vec<f64>,
     /// pbrt-v3's CPU seconds in each run, when measured (`pbrt_cpu_s` is the least).
     pub pbrt_cpu_s_runs: Vec<f64>,
-}
-
-/// CPU seconds (user + system) this process has used so far, from /proc (Linux); `None` elsewhere.
-pub(crate) fn process_cpu_secs() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    let after = stat.rsplit_once(')')?.1;
-    let f: Vec<&str> = after.split_whitespace().collect();
-    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
-    Some(ticks / clock_ticks_per_sec())
-}
-
-fn clock_ticks_per_sec() -> f64 {
-    // SAFETY: sysconf has no preconditions.
-    let t = unsafe { libc::sysconf(libc::_SC_CLK_TCK) };
-    if t > 0 { t as f64 } else { 100.0 }
-}
-
-/// CPU seconds (user + system) used by this process's waited-for children so far.
-pub(crate) fn children_cpu_secs() -> f64 {
-    // SAFETY: getrusage writes into the zeroed struct we pass.
-    let mut ru: libc::rusage = unsafe { std::mem::zeroed() };
-    if unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut ru) } != 0 {
-        return 0.0;
-    }
-    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
-    secs(ru.ru_utime) + secs(ru.ru_stime)
 }
 
 /// `text` with its `ambientocclusion` ray count set to `n` (the `ao-ref.pbrt` files write `[256]`).
@@ -493,14 +468,5 @@ mod tests {
         );
         assert!(shading_integrator_line("bdpt").is_err());
         assert!(with_integrator("WorldBegin\n", line, 4, Path::new("x.pbrt")).is_err());
-    }
-
-    #[test]
-    fn child_cpu_time_counts_a_finished_child() {
-        let before = children_cpu_secs();
-        let status = Command::new("sh").args(["-c", "i=0; while [ $i -lt 200000 ]; do i=$((i+1)); done"]).status();
-        if status.is_ok_and(|s| s.success()) {
-            assert!(children_cpu_secs() > before, "a busy child used some CPU");
-        }
     }
 }

@@ -20,11 +20,11 @@ use std::time::Instant;
 
 use glam::Vec3A;
 
-use super::bench::process_cpu_secs;
 use crate::cache::{CacheIndex, LookupParams};
 use crate::error::{Error, Result, Warnings};
 use crate::image::Image;
 use crate::metrics::flip;
+use crate::os::process_cpu_secs;
 use crate::placement::synthetic::{MaskOracle, room};
 use crate::placement::{AdaptivePlacement, AdaptiveSampling, Discontinuity, ImageUniform, InitialPlacement};
 use crate::placement::{PlacementParams, SpatialDirectional, ViewGuided};

@@ -38,7 +38,8 @@ use crate::metrics::{Metric, compare, rmse};
 use crate::render::{RenderSettings, render};
 use crate::scene::{LoadOptions, load_str};
 
-use super::bench::{BenchArgs, children_cpu_secs, process_cpu_secs};
+use super::bench::BenchArgs;
+use crate::os::{children_cpu_secs, process_cpu_secs};
 
 /// The scene folder under `--scenes`.
 const SCENE: &str = "bitterli-cornell-box-v3";

@@ -360,7 +360,7 @@ impl Application for ImportanceCache {
                 format!("must be between 1 and {MAX_VPLS}, got {vpls} (up to {} of VPLs)", gib(need)),
             ));
         }
-        if let Some(avail) = crate::render::cache_driver::stats::available_memory_bytes()
+        if let Some(avail) = crate::os::available_memory_bytes()
             && need > avail
         {
             return Err(bad(

@@ -26,7 +26,8 @@ use crate::scene::Scene;
 use crate::scene::ray::RayCounters;
 
 use super::settings::{CacheSettings, Placement};
-use super::stats::{CacheStats, StageTimes, available_memory_bytes, peak_memory_bytes};
+use super::stats::{CacheStats, StageTimes};
+use crate::os::{available_memory_bytes, peak_memory_bytes};
 
 /// What a cache-based render produced besides the image.
 #[derive(Clone, Debug)]

@@ -111,22 +111,6 @@ fn ser_info<S: serde::Serializer>(i: &PlacementInfo, s: S) -> Result<S::Ok, S::E
     st.end()
 }
 
-/// Peak resident set size of this process (Linux `VmHWM`), if known.
-pub fn peak_memory_bytes() -> Option<u64> {
-    let s = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
-}
-
-/// Memory the system can still give this process (Linux `MemAvailable`), if known.
-pub fn available_memory_bytes() -> Option<u64> {
-    let s = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = s.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
-}
-
 impl CacheStats {
     /// The end-of-run summary lines.
     pub fn summary(&self) -> String {
