@@ -13,8 +13,8 @@ use std::sync::Mutex;
 
 use cachert::Warnings;
 use cachert::image::{self, Image};
+use cachert::parse::integrator::IntegratorParams;
 use cachert::render::ao::AmbientOcclusion;
-use cachert::render::params::IntegratorParams;
 use cachert::scene::shapes::{obj, ply};
 use cachert::scene::{LoadOptions, LoadedScene, load, load_str};
 use common::TempDir;

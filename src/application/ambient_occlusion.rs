@@ -15,7 +15,7 @@ use glam::Vec3A;
 
 use crate::error::{Error, Result, Warnings};
 use crate::gbuffer::ShadingPoint;
-use crate::render::params::{IntegratorParams, Parameter, json_f32};
+use crate::parse::integrator::{IntegratorParams, Parameter, json_f32};
 use crate::sampling::warp::equal_area_hemisphere;
 use crate::sampling::{Frame, Rng, Stratum};
 use crate::scene::Scene;

@@ -30,9 +30,8 @@ use glam::Vec3A;
 
 use crate::error::{Error, Result, Warnings};
 use crate::gbuffer::ShadingPoint;
-use crate::render::directlighting::MAX_DEPTH;
-use crate::render::lighting::{PassThrough, ShadePoint, Shading, estimate_direct};
-use crate::render::params::{IntegratorParams, Parameter};
+use crate::parse::integrator::MAX_DEPTH;
+use crate::parse::integrator::{IntegratorParams, Parameter};
 use crate::sampling::warp::equal_area_hemisphere;
 use crate::sampling::{Frame, Rng, Stratum};
 use crate::scene::Scene;
@@ -41,6 +40,7 @@ use crate::scene::ray::{Ray, RayCounters, offset_ray_origin};
 use crate::shading::bsdf::Bsdf;
 use crate::shading::bxdf::BxdfFlags;
 use crate::shading::light::LightSelect;
+use crate::shading::lighting::{PassThrough, ShadePoint, Shading, estimate_direct};
 use crate::shading::{Spectrum, luminance};
 
 use super::{Application, Neighbour, PerPixelTerm, PerSample};

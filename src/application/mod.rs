@@ -13,8 +13,8 @@
 //! irradiance caching the lights, materials and textures) and every other call reads that, so the cache
 //! driver never needs to know what an application shades with.
 //!
-//! Depends on `scene`, `gbuffer`, `sampling`, `shading`, the shading estimators of `render::lighting` and the
-//! parameter reader `render::params`; never on `placement` or the cache driver.
+//! Depends on `scene`, `gbuffer`, `sampling`, `shading` (its estimators in `shading::lighting`) and the
+//! parameter reader `parse::integrator`; never on `placement` or the cache driver.
 
 pub mod ambient_occlusion;
 pub mod importance;
@@ -25,7 +25,7 @@ use glam::Vec3A;
 
 use crate::error::{Result, Warnings};
 use crate::gbuffer::ShadingPoint;
-use crate::render::params::{IntegratorParams, Parameter};
+use crate::parse::integrator::{IntegratorParams, Parameter};
 use crate::sampling::{Rng, Stratum};
 use crate::scene::Scene;
 use crate::scene::ray::RayCounters;

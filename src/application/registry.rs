@@ -5,7 +5,7 @@
 //!
 //! Depends only on the applications of this module's parent.
 
-use crate::render::params::Parameter;
+use crate::parse::integrator::Parameter;
 
 use super::ambient_occlusion::CacheAo;
 use super::importance::ImportanceCache;

@@ -2,11 +2,12 @@
 //!
 //! The tokenizer (`lexer`) is written with nom; the directive parser (`parser`) builds typed parameter
 //! lists. `Include` is followed here (relative to the including file, cycles are an error) so later stages
-//! see one list. Nothing in this module knows about rendering; it must not depend on `scene` or anything
+//! see one list; [`integrator`] reads an integrator's parameters with the command line's overrides. Nothing in this module knows about rendering; it must not depend on `scene` or anything
 //! after it. No input can make it panic: every problem is an [`Error`] with a location.
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod directive;
+pub mod integrator;
 mod lexer;
 pub mod params;
 mod parser;

@@ -17,9 +17,10 @@ use crate::scene::accel::{OccluderCache, OccluderHint};
 use crate::scene::ray::{Ray, offset_ray_origin};
 use crate::scene::sampler::SamplerSpec;
 
-use super::params::IntegratorParams;
-use super::samples::PixelSamples;
-use super::{PixelIntegrator, RayCounters, Scratch};
+use super::{PixelIntegrator, RayCounters};
+use crate::parse::integrator::IntegratorParams;
+use crate::sampling::pixel_samples::PixelSamples;
+use crate::shading::lighting::Scratch;
 
 /// Settings of the `ambientocclusion` integrator.
 ///

@@ -3,7 +3,7 @@
 //! (`"one"`), and perfect specular reflection and transmission followed up to `maxdepth`.
 //!
 //! A per-pixel reference for the cache applications; depends on `scene`, `shading` and the estimators in
-//! `render::lighting`.
+//! `shading::lighting`.
 
 use crate::error::{Error, Result, Warnings};
 use crate::scene::Scene;
@@ -14,16 +14,14 @@ use crate::shading::bsdf::Bsdf;
 use crate::shading::bxdf::BxdfFlags;
 use crate::shading::light::LightSelect;
 
-use super::lighting::{ShadePoint, Shading, sample_all_lights, sample_one_light};
-use super::params::IntegratorParams;
-use super::samples::PixelSamples;
-use super::{PixelIntegrator, RayCounters, Scratch};
+use super::{PixelIntegrator, RayCounters};
+use crate::parse::integrator::{IntegratorParams, MAX_DEPTH};
+use crate::sampling::pixel_samples::PixelSamples;
+use crate::shading::lighting::Scratch;
+use crate::shading::lighting::{ShadePoint, Shading, sample_all_lights, sample_one_light};
 
 /// Most surfaces without a material a ray passes through before it gives up.
 const MAX_PASS_THROUGH: usize = 1024;
-
-/// Largest `maxdepth` accepted (each level may double the rays of a glass path).
-pub const MAX_DEPTH: i64 = 64;
 
 /// How lights are sampled at each shading point.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

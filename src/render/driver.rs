@@ -12,8 +12,9 @@ use crate::scene::film::PixelBounds;
 use crate::scene::sampler::SamplerSpec;
 
 use super::film::{Film, FilmTile};
-use super::samples::PixelSamples;
-use super::{PixelIntegrator, RayCounters, Scratch};
+use super::{PixelIntegrator, RayCounters};
+use crate::sampling::pixel_samples::PixelSamples;
+use crate::shading::lighting::Scratch;
 
 const TILE: i32 = 16;
 
@@ -72,7 +73,7 @@ fn render_tile(
     image: &PixelBounds,
 ) -> (FilmTile, RayCounters) {
     let mut tile = FilmTile::new(*t, &scene.filter, image);
-    let mut samples = PixelSamples::new(sampler, seed);
+    let mut samples = PixelSamples::new(sampler.kind, sampler.spp, seed);
     let mut scratch = Scratch::default();
     let mut counters = RayCounters::default();
     let max_lum = scene.film.max_sample_luminance;

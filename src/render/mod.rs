@@ -10,54 +10,22 @@ pub mod cache_driver;
 pub mod directlighting;
 mod driver;
 pub mod film;
-pub mod lighting;
-pub mod params;
 pub mod path;
-pub mod samples;
 
 pub use driver::render_image;
-
-use glam::Vec3A;
 
 use crate::application::registry;
 use crate::error::{Error, Result, Warnings};
 use crate::image::Image;
+use crate::parse::integrator::IntegratorParams;
 use crate::parse::{Named, ParamList};
 use crate::scene::Scene;
-use crate::scene::accel::OccluderHint;
 use crate::scene::ray::Ray;
-use crate::shading::bsdf::Bsdf;
+use crate::shading::lighting::Scratch;
 
-use samples::PixelSamples;
+use crate::sampling::pixel_samples::PixelSamples;
 
 pub use crate::scene::ray::RayCounters;
-
-/// Storage a thread's integrator reuses from one camera sample to the next (one per tile).
-#[derive(Clone, Debug, Default)]
-pub struct Scratch {
-    /// 2-D sample arrays (ambient-occlusion directions, light and BSDF samples).
-    pub points: Vec<[f32; 2]>,
-    /// Per light, the blocker of its last shadow ray (see `scene::accel::OccluderHint`): `directlighting`
-    /// with every light sampled at every vertex tests it first, as neighbouring points' shadow rays toward
-    /// the same light are often blocked by the same triangle. It never changes an answer.
-    pub light_hints: Vec<OccluderHint>,
-    /// BSDFs kept from one camera sample to the next, one per depth of recursion (`path` uses the first,
-    /// `directlighting` one per specular bounce): refilled at each hit ([`Bsdf::reset`]) rather than built
-    /// afresh, which writes all 848 bytes of its lobe storage.
-    pub bsdfs: Vec<Bsdf>,
-}
-
-impl Scratch {
-    /// Takes [`Scratch::bsdfs`] out, at least `n` of them (made when missing), so that an integrator can
-    /// hold them while it lends the scratch to the estimators; it puts them back with `scratch.bsdfs = …`.
-    pub fn take_bsdfs(&mut self, n: usize) -> Vec<Bsdf> {
-        let mut bsdfs = std::mem::take(&mut self.bsdfs);
-        if bsdfs.len() < n {
-            bsdfs.resize(n, Bsdf::new(Vec3A::Z, Vec3A::Z, Vec3A::X, 1.0));
-        }
-        bsdfs
-    }
-}
 
 /// An integrator that estimates the radiance along one camera ray.
 pub trait PixelIntegrator: Sync {
@@ -162,7 +130,7 @@ pub fn render(
             registry::names()
         )));
     }
-    let iparams = params::IntegratorParams::new(params, &settings.set);
+    let iparams = IntegratorParams::new(params, &settings.set);
     let pixel = per_pixel_integrator(name, &iparams, scene, &sampler, settings.quick, warnings)?;
     iparams.check_overrides(name)?;
     report_unused(integrator, name, &settings.set, warnings);
@@ -174,7 +142,7 @@ pub fn render(
 /// The per-pixel integrator named `name` with parameters `p`.
 fn per_pixel_integrator<'a>(
     name: &str,
-    p: &params::IntegratorParams<'_>,
+    p: &IntegratorParams<'_>,
     scene: &'a Scene,
     sampler: &crate::scene::sampler::SamplerSpec,
     quick: bool,
@@ -208,7 +176,7 @@ pub(crate) fn render_per_pixel_term(
         sampler.spp = spp;
     }
     let empty = ParamList::default();
-    let iparams = params::IntegratorParams::new(&empty, set);
+    let iparams = IntegratorParams::new(&empty, set);
     let pixel = per_pixel_integrator(name, &iparams, scene, &sampler, settings.quick, warnings)?;
     Ok(render_image(scene, &sampler, pixel.as_ref(), settings.seed, settings.progress))
 }

@@ -6,7 +6,7 @@
 //! `lightsamplestrategy`: `uniform`, `power` and `spatial` (pbrt-v3's default: per-voxel probabilities, see
 //! `shading::light::spatial`) as pbrt-v3 has them.
 //!
-//! A per-pixel reference for the cache applications; depends on `scene`, `shading` and `render::lighting`.
+//! A per-pixel reference for the cache applications; depends on `scene`, `shading` and `shading::lighting`.
 
 use crate::error::{Error, Result, Warnings};
 use crate::scene::Scene;
@@ -16,10 +16,11 @@ use crate::shading::bxdf::BxdfFlags;
 use crate::shading::light::{LightSelect, SpatialSelect};
 
 use super::directlighting::read_max_depth;
-use super::lighting::{PassThrough, ShadePoint, Shading, sample_one_light};
-use super::params::IntegratorParams;
-use super::samples::PixelSamples;
-use super::{PixelIntegrator, RayCounters, Scratch};
+use super::{PixelIntegrator, RayCounters};
+use crate::parse::integrator::IntegratorParams;
+use crate::sampling::pixel_samples::PixelSamples;
+use crate::shading::lighting::Scratch;
+use crate::shading::lighting::{PassThrough, ShadePoint, Shading, sample_one_light};
 
 /// pbrt-v3's `path` integrator.
 ///

@@ -1,18 +1,9 @@
 //! STAGE 2 (scene): the `Sampler` directive — which pbrt-v3 sampler and how many samples per pixel it
-//! takes. The sample values themselves come from `render::samples`, keyed by pixel and sample index.
+//! takes. The sample values themselves come from `sampling::pixel_samples`, keyed by pixel and sample index.
 
 use crate::error::{Error, Result, Warnings};
 use crate::parse::Named;
-
-/// How sample values are generated.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SamplerKind {
-    /// Independent uniform random numbers (pbrt-v3 `random`).
-    Random,
-    /// Stratified / low-discrepancy points: `stratified`, `halton`, `sobol`, `02sequence`, `maxmindist`
-    /// all map here (scrambled (0,2)-sequence points per pixel; see `render::samples`).
-    Stratified,
-}
+use crate::sampling::pixel_samples::SamplerKind;
 
 /// The sampler as described in the scene.
 #[derive(Clone, Debug, PartialEq)]

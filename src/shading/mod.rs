@@ -8,6 +8,7 @@
 pub mod bsdf;
 pub mod bxdf;
 pub mod light;
+pub mod lighting;
 pub mod material;
 pub mod texture;
 

@@ -203,11 +203,11 @@ impl Lobe<'_> {
 mod tests {
     use super::*;
     use crate::application::importance::vpl::with_lit_scene;
-    use crate::render::lighting::Shading;
     use crate::sampling::Rng;
     use crate::scene::Scene;
     use crate::scene::ray::Ray;
     use crate::shading::light::LightSelect;
+    use crate::shading::lighting::Shading;
 
     /// A glossy floor (roughness 0.1: a lobe about 24° wide) under a large lamp, and the floor's receiver
     /// at its centre seen at 45°.

@@ -40,13 +40,13 @@ pub mod vpl;
 
 use crate::error::{Error, Result, Warnings};
 use crate::gbuffer::ShadingPoint;
-use crate::render::lighting::Shading;
-use crate::render::params::{IntegratorParams, Parameter};
+use crate::parse::integrator::{IntegratorParams, Parameter};
 use crate::sampling::{Rng, Stratum};
 use crate::scene::Scene;
 use crate::scene::accel::OccluderHint;
 use crate::scene::ray::RayCounters;
 use crate::shading::light::LightSelect;
+use crate::shading::lighting::Shading;
 use crate::shading::{Spectrum, luminance};
 
 use super::{Application, Baseline, Neighbour, PerSample};

@@ -40,12 +40,12 @@ use glam::Vec3A;
 
 use super::spheres::SphereTree;
 use super::vpl::{Emitter, Receiver, Vpls};
-use crate::render::lighting::Shading;
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::scene::ray::RayCounters;
 use crate::shading::bsdf::Bsdf;
 use crate::shading::bxdf::Bxdf;
+use crate::shading::lighting::Shading;
 use crate::shading::{Spectrum, luminance};
 
 /// Microfacet density (sr⁻¹) above which a lobe's directions are split off. CHOICE: 1 — below it a glossy

@@ -21,11 +21,10 @@
 //! reference walks stays small. Light tracing uses the radiance BSDFs (the adjoint correction for shading
 //! normals and refraction is left out; estimator and reference share the same VPLs either way).
 //!
-//! Depends on `scene`, `shading` and `render::lighting` (the prepared shading data); never on placement.
+//! Depends on `scene`, `shading` and `shading::lighting` (the prepared shading data); never on placement.
 
 use glam::Vec3A;
 
-use crate::render::lighting::{PassThrough, Shading};
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::scene::geometry::SurfaceInteraction;
@@ -33,6 +32,7 @@ use crate::scene::ray::{Ray, RayCounters, offset_ray_origin};
 use crate::shading::bsdf::Bsdf;
 use crate::shading::bxdf::{Bxdf, BxdfFlags};
 use crate::shading::light::{EmitterPoint, LightSelect, SHADOW_EPSILON, SurfacePoint, spawn_ray_to};
+use crate::shading::lighting::{PassThrough, Shading};
 use crate::shading::{Spectrum, luminance};
 
 /// How a VPL sends light toward a receiver.

@@ -20,8 +20,8 @@ use crate::error::{Result, Warnings};
 use crate::parse::{Named, ParamList};
 use crate::scene::{Scene, filter};
 
-use super::params::{IntegratorParams, help_text};
 use super::{RenderOutput, RenderSettings, render_per_pixel_term, report_unused, with_threads};
+use crate::parse::integrator::{IntegratorParams, help_text};
 
 /// Renders `scene` with cache application `A`: the scene's `Integrator` parameters (when it names `A`)
 /// and `settings.set` give both the generic and `A`'s parameters; `settings.cache` wins over them.

@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::placement::{AngularMode, PlacementParams, registry};
 use crate::scene::Scene;
 
-use super::super::params::{IntegratorParams, Parameter, json_f32};
+use crate::parse::integrator::{IntegratorParams, Parameter, json_f32};
 
 /// The generic parameters of every cache-based integrator: name, pbrt type, default, meaning.
 pub const PARAMETERS: &[Parameter] = &[

@@ -1,4 +1,4 @@
-//! STAGE 6 (render): the sample values of one camera sample — film position, lens position and 2-D arrays
+//! Sampling (below `scene`): the sample values of one camera sample — film position, lens position and 2-D arrays
 //! for integrators — keyed by (seed, pixel, sample index), never by thread, so images are identical for any
 //! thread count.
 //!
@@ -10,7 +10,16 @@
 
 use crate::sampling::rng::{Rng, hash3, mix64};
 use crate::sampling::sequence::{permute, sobol02};
-use crate::scene::sampler::{SamplerKind, SamplerSpec};
+
+/// How sample values are generated (what a scene's `Sampler` directive chooses).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SamplerKind {
+    /// Independent uniform random numbers (pbrt-v3 `random`).
+    Random,
+    /// Stratified / low-discrepancy points: `stratified`, `halton`, `sobol`, `02sequence`, `maxmindist`
+    /// all map here (scrambled (0,2)-sequence points per pixel).
+    Stratified,
+}
 
 /// A stream of sample values for one (pixel, sample index).
 #[derive(Clone, Debug)]
@@ -39,12 +48,12 @@ const STAGE_CAMERA: u64 = 0x63616d;
 const ARRAY_BLOCKS: u64 = 0x626c_6f63_6b73;
 
 impl PixelSamples {
-    /// A stream for `spec`'s sampler with `seed` (call [`PixelSamples::start`] before use).
-    pub fn new(spec: &SamplerSpec, seed: u64) -> Self {
+    /// A stream of `kind` for `spp` samples per pixel with `seed` (call [`PixelSamples::start`] before use).
+    pub fn new(kind: SamplerKind, spp: u32, seed: u64) -> Self {
         PixelSamples {
-            kind: spec.kind,
+            kind,
             seed,
-            spp: spec.spp.max(1),
+            spp: spp.max(1),
             pixel_key: 0,
             index: 0,
             dim: 0,
@@ -232,15 +241,11 @@ mod tests {
         }
     }
 
-    fn spec(kind: SamplerKind, spp: u32) -> SamplerSpec {
-        SamplerSpec { name: String::new(), kind, spp, pow2_arrays: false }
-    }
-
     #[test]
     fn same_key_same_values_and_film_samples_are_stratified() {
-        let s = spec(SamplerKind::Stratified, 16);
-        let mut a = PixelSamples::new(&s, 3);
-        let mut b = PixelSamples::new(&s, 3);
+        let s = (SamplerKind::Stratified, 16);
+        let mut a = PixelSamples::new(s.0, s.1, 3);
+        let mut b = PixelSamples::new(s.0, s.1, 3);
         let mut cells = [false; 16];
         for i in 0..16 {
             a.start([5, -2], i);
@@ -251,7 +256,7 @@ mod tests {
             assert!(!cells[c], "two samples in one stratum");
             cells[c] = true;
         }
-        let mut r = PixelSamples::new(&spec(SamplerKind::Random, 4), 3);
+        let mut r = PixelSamples::new(SamplerKind::Random, 4, 3);
         r.start([0, 0], 0);
         let x = r.get2d();
         r.start([0, 0], 0);

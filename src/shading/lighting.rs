@@ -1,18 +1,20 @@
-//! STAGE 6 (render): the shading data of a scene made ready for rendering (materials compiled, texture
+//! STAGE 5 (shading): the shading data of a scene made ready for rendering (materials compiled, texture
 //! images loaded, lights built) and pbrt-v3's direct-lighting estimators over it — `EstimateDirect` with
 //! multiple importance sampling (power heuristic, β = 2), `UniformSampleAllLights` and
-//! `UniformSampleOneLight` — shared by the `directlighting` and `path` integrators (and, later, by the
-//! cache applications that shade real surfaces).
+//! `UniformSampleOneLight` — shared by the `directlighting` and `path` integrators and by the cache
+//! applications that shade real surfaces, with the per-thread [`Scratch`] they reuse.
 //!
-//! Depends on `scene` and `shading`; knows nothing of placement or caches.
+//! Depends on `scene`, `sampling` and the rest of `shading`; knows nothing of integrators, placement or
+//! caches.
 
 use glam::Vec3A;
 
 use crate::error::{Result, Warnings};
+use crate::sampling::pixel_samples::PixelSamples;
 use crate::scene::Scene;
 use crate::scene::accel::OccluderHint;
 use crate::scene::geometry::SurfaceInteraction;
-use crate::scene::ray::Ray;
+use crate::scene::ray::{Ray, RayCounters};
 use crate::shading::Spectrum;
 use crate::shading::bsdf::Bsdf;
 use crate::shading::bxdf::BxdfFlags;
@@ -20,8 +22,32 @@ use crate::shading::light::Lights;
 use crate::shading::material::Materials;
 use crate::shading::texture::Textures;
 
-use super::samples::PixelSamples;
-use super::{RayCounters, Scratch};
+/// Storage a thread's integrator reuses from one camera sample to the next (one per tile).
+#[derive(Clone, Debug, Default)]
+pub struct Scratch {
+    /// 2-D sample arrays (ambient-occlusion directions, light and BSDF samples).
+    pub points: Vec<[f32; 2]>,
+    /// Per light, the blocker of its last shadow ray (see `scene::accel::OccluderHint`): `directlighting`
+    /// with every light sampled at every vertex tests it first, as neighbouring points' shadow rays toward
+    /// the same light are often blocked by the same triangle. It never changes an answer.
+    pub light_hints: Vec<OccluderHint>,
+    /// BSDFs kept from one camera sample to the next, one per depth of recursion (`path` uses the first,
+    /// `directlighting` one per specular bounce): refilled at each hit ([`Bsdf::reset`]) rather than built
+    /// afresh, which writes all 848 bytes of its lobe storage.
+    pub bsdfs: Vec<Bsdf>,
+}
+
+impl Scratch {
+    /// Takes [`Scratch::bsdfs`] out, at least `n` of them (made when missing), so that an integrator can
+    /// hold them while it lends the scratch to the estimators; it puts them back with `scratch.bsdfs = …`.
+    pub fn take_bsdfs(&mut self, n: usize) -> Vec<Bsdf> {
+        let mut bsdfs = std::mem::take(&mut self.bsdfs);
+        if bsdfs.len() < n {
+            bsdfs.resize(n, Bsdf::new(Vec3A::Z, Vec3A::Z, Vec3A::X, 1.0));
+        }
+        bsdfs
+    }
+}
 
 /// Materials, textures and lights of one scene, ready to shade with.
 pub struct Shading<'a> {

@@ -1,11 +1,18 @@
-//! STAGE 6 (render): integrator parameters from two sources — the scene's `Integrator` directive and the
-//! command line's `--set key=value` — read through one typed interface. A `--set` value wins; a `--set` key
-//! the integrator does not read is an error naming the valid keys.
+//! STAGE 1 (parse): integrator parameters from two sources — the scene's `Integrator` directive and the
+//! command line's `--set key=value` — read through one typed interface, and the documented parameter
+//! tables every integrator and cache application declares. A `--set` value wins; a `--set` key the
+//! integrator does not read is an error naming the valid keys.
+//!
+//! Depends on the parameter lists of this module's parent only; every integrator and application reads
+//! its parameters through it.
 
 use std::cell::RefCell;
 
 use crate::error::{Error, Result};
 use crate::parse::ParamList;
+
+/// Largest `maxdepth` any integrator accepts (each level may double the rays of a glass path).
+pub const MAX_DEPTH: i64 = 64;
 
 /// Typed access to an integrator's parameters with command-line overrides.
 #[derive(Debug)]
