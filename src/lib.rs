@@ -12,7 +12,8 @@
 //! | 5 | [`cache`] | the kd-tree over cache positions and the selection of a sample's caches (Eq. 5) |
 //! | 5 | [`application`] | what a cache holds: one file per cache-based application (the `Application` trait) and `application::registry`, the one list of them — **the seam for a new application** |
 //! | 5 | [`shading`] | textures, materials, lights: what a surface does with light |
-//! | 6 | [`render`] | the per-pixel integrators and pixel loop, and `render::cache_driver`, the one generic driver of every cache-based integrator |
+//! | 6 | [`render`] | the per-pixel integrators (`ambientocclusion`, `directlighting`, `path`) and their pixel loop |
+//! | 7 | [`integrator`] | every integrator by name, and `integrator::cache`, the one generic driver of every cache-based integrator |
 //! | — | [`experiment`] | sweeps of placements × budgets × seeds against the per-sample reference |
 //! | — | [`golden`] | golden-image regression: a manifest of renders re-rendered and compared bit for bit |
 //! | — | [`sampling`] | random streams keyed by pixel, low-discrepancy sequences, warps, frames |
@@ -33,6 +34,7 @@ pub mod experiment;
 pub mod gbuffer;
 pub mod golden;
 pub mod image;
+pub mod integrator;
 pub mod metrics;
 pub mod os;
 pub mod parse;

@@ -469,7 +469,7 @@ fn failed_runs_leave_no_file_behind() {
     dir.write("bad.pbrt", world("Shape \"sphere\" \"float radius\" [-1]"));
     let path_message = format!(
         "error: integrator \"bdpt\" is not implemented by cachert (available: {}); choose one with --integrator",
-        cachert::render::integrator_names()
+        cachert::integrator::integrator_names()
     );
     let cases: [(&[&str], &str); 6] = [
         (

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use cachert::Warnings;
 use cachert::image::Image;
-use cachert::render::{RenderOutput, RenderSettings, render};
+use cachert::integrator::{RenderOutput, RenderSettings, render};
 use cachert::scene::{LoadOptions, load, load_str};
 
 /// Every placement name, plus the per-sample reference.
@@ -257,7 +257,7 @@ fn error_falls_as_caches_grow_on_the_shipped_room() {
 fn the_documented_parameter_tables_are_exactly_what_cacheao_reads() {
     use cachert::application::Application;
     use cachert::application::ambient_occlusion::CacheAo;
-    use cachert::render::cache_driver::{self, PARAMETERS};
+    use cachert::integrator::cache::{self, PARAMETERS};
     let e = run(&sphere_scene(), &[("zzz", "1")], None).unwrap_err().to_string();
     let (_, list) = e.split_once("it reads: ").unwrap_or_else(|| panic!("{e}"));
     let mut read: Vec<&str> = list.trim_end_matches(')').split(", ").collect();
@@ -265,6 +265,6 @@ fn the_documented_parameter_tables_are_exactly_what_cacheao_reads() {
     read.sort_unstable();
     documented.sort_unstable();
     assert_eq!(read, documented);
-    let help = cache_driver::help();
+    let help = cache::help();
     assert!(documented.iter().all(|n| help.contains(n)) && help.contains("cacheao"), "{help}");
 }

@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use cachert::Warnings;
-use cachert::render::{RenderSettings, render};
+use cachert::integrator::{RenderSettings, render};
 use cachert::scene::{LoadOptions, load_str};
 
 /// A unit sphere and a thin box over a plane, seen in perspective at 24×18 pixels.

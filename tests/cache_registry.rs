@@ -12,10 +12,11 @@ use cachert::Warnings;
 use cachert::application::registry::APPLICATIONS;
 use cachert::application::{Application, Neighbour};
 use cachert::gbuffer::ShadingPoint;
+use cachert::integrator::cache::{self, CacheOverrides, Placement, render_with};
+use cachert::integrator::{RenderOutput, RenderSettings};
 use cachert::parse::integrator::{IntegratorParams, Parameter, markdown_table};
 use cachert::placement::registry::NAMES;
-use cachert::render::cache_driver::{self, CacheOverrides, Placement, render_with};
-use cachert::render::{RayCounters, RenderOutput, RenderSettings};
+use cachert::render::RayCounters;
 use cachert::sampling::{Rng, Stratum};
 use cachert::scene::{LoadOptions, Scene, load_str};
 
@@ -171,8 +172,8 @@ fn an_application_defined_in_a_test_renders_with_every_placement() {
 #[test]
 fn every_registered_application_has_its_tables_in_the_readme_and_the_help() {
     let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
-    assert!(readme.contains(&markdown_table(cache_driver::PARAMETERS)), "the generic table is not in the README");
-    let help = cache_driver::help();
+    assert!(readme.contains(&markdown_table(cache::PARAMETERS)), "the generic table is not in the README");
+    let help = cache::help();
     for e in APPLICATIONS {
         let heading = format!("### `{}`", e.name);
         let at = readme.find(&heading).unwrap_or_else(|| panic!("README has no heading {heading}"));
@@ -216,7 +217,7 @@ fn no_file_of_src_outside_application_names_an_application() {
 fn unknown_integrators_and_misplaced_cache_flags_list_the_registry() {
     let loaded = load_str(SCENE, Path::new("toy.pbrt"), LoadOptions::default()).unwrap();
     let go = |s: RenderSettings| {
-        cachert::render::render(&loaded.scene, None, &s, &mut Warnings::default()).unwrap_err().to_string()
+        cachert::integrator::render(&loaded.scene, None, &s, &mut Warnings::default()).unwrap_err().to_string()
     };
     let e = go(RenderSettings { integrator: Some("nope".into()), ..Default::default() });
     assert!(APPLICATIONS.iter().all(|a| e.contains(a.name)) && e.contains("ambientocclusion"), "{e}");
@@ -251,7 +252,7 @@ fn the_command_line_placement_and_budget_win_and_the_stats_report_the_resolved_s
     for e in APPLICATIONS.iter().filter(|e| e.name == name) {
         assert!(e.parameters.iter().all(|q| p.get(q.name).is_some()), "{json:#}");
     }
-    assert!(cache_driver::PARAMETERS.iter().all(|q| p.get(q.name).is_some()), "{json:#}");
+    assert!(cache::PARAMETERS.iter().all(|q| p.get(q.name).is_some()), "{json:#}");
     // A bad placement is refused while the flags are read, before anything renders.
     let e = cachert::cli::Cli::try_parse_from(["cachert", "render", "--placement", "vgc+foo", "x.pbrt"]).unwrap_err();
     assert!(e.to_string().contains("vgc+dgs:geom"), "{e}");

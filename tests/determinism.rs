@@ -4,7 +4,7 @@
 mod common;
 
 use cachert::image::Image;
-use cachert::render::RenderSettings;
+use cachert::integrator::RenderSettings;
 use common::render_text;
 
 /// Spheres on a plane and a box, seen in perspective; `sampler` is a whole Sampler directive.

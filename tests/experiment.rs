@@ -8,7 +8,7 @@ mod common;
 use std::path::Path;
 
 use cachert::experiment::{Sweep, run};
-use cachert::render::cache_driver::Placement;
+use cachert::integrator::cache::Placement;
 
 fn sweep(out: &Path, baseline_samples: Vec<u32>) -> Sweep {
     Sweep {

@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 
 use cachert::Warnings;
 use cachert::image::Image;
-use cachert::render::{RenderOutput, RenderSettings, render};
+use cachert::integrator::{RenderOutput, RenderSettings, render};
 use cachert::scene::{LoadOptions, LoadedScene, load, load_str};
 
 /// Seeds per unbiasedness check.

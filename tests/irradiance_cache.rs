@@ -19,8 +19,8 @@ use std::path::Path;
 
 use cachert::Warnings;
 use cachert::image::Image;
+use cachert::integrator::{RenderOutput, RenderSettings, render};
 use cachert::metrics::rmse;
-use cachert::render::{RenderOutput, RenderSettings, render};
 use cachert::scene::{LoadOptions, LoadedScene, load, load_str};
 
 /// Every placement name, the per-sample reference first.
@@ -469,7 +469,7 @@ fn out_of_range_parameters_are_errors_naming_the_parameter() {
 fn the_documented_parameter_tables_are_exactly_what_irradiancecache_reads() {
     use cachert::application::Application;
     use cachert::application::irradiance::IrradianceCache;
-    use cachert::render::cache_driver::{self, PARAMETERS};
+    use cachert::integrator::cache::{self, PARAMETERS};
     let e = run(&furnace(true, 8), &[("zzz", "1")]).unwrap_err().to_string();
     let (_, list) = e.split_once("it reads: ").unwrap_or_else(|| panic!("{e}"));
     let mut read: Vec<&str> = list.trim_end_matches(')').split(", ").collect();
@@ -477,7 +477,7 @@ fn the_documented_parameter_tables_are_exactly_what_irradiancecache_reads() {
     read.sort_unstable();
     documented.sort_unstable();
     assert_eq!(read, documented);
-    let help = cache_driver::help();
+    let help = cache::help();
     assert!(help.contains("irradiancecache") && IrradianceCache::PARAMETERS.iter().all(|p| help.contains(p.name)));
 }
 

@@ -17,8 +17,8 @@ mod common;
 use std::path::Path;
 
 use cachert::image;
+use cachert::integrator::RenderSettings;
 use cachert::metrics::rmse;
-use cachert::render::RenderSettings;
 use cachert::scene::LoadOptions;
 use common::{mean, render_file, shared_scenes};
 
@@ -73,7 +73,7 @@ fn staircase_matches_pbrt_v3() {
 }
 
 /// `cachert render X --quick --integrator ambientocclusion`, as a library call.
-fn quick_ao(path: &Path) -> cachert::Result<(cachert::render::RenderOutput, cachert::scene::LoadedScene)> {
+fn quick_ao(path: &Path) -> cachert::Result<(cachert::integrator::RenderOutput, cachert::scene::LoadedScene)> {
     let s = RenderSettings {
         seed: 0,
         quick: true,

@@ -6,7 +6,7 @@ mod common;
 use std::path::Path;
 
 use cachert::Warnings;
-use cachert::render::{RenderOutput, RenderSettings, render};
+use cachert::integrator::{RenderOutput, RenderSettings, render};
 use cachert::scene::{LoadOptions, load_str};
 
 fn run(text: &str, settings: RenderSettings) -> cachert::Result<(RenderOutput, Vec<String>)> {

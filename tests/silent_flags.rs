@@ -8,7 +8,7 @@ mod common;
 use std::path::Path;
 
 use cachert::Warnings;
-use cachert::render::{RenderOutput, RenderSettings, render};
+use cachert::integrator::{RenderOutput, RenderSettings, render};
 use cachert::scene::{LoadOptions, load_str};
 
 const WORLD: &str = "WorldBegin\nShape \"trianglemesh\" \"point P\" [-9 -9 0  9 -9 0  9 9 0  -9 9 0] \

@@ -17,9 +17,9 @@ use std::path::Path;
 use cachert::Warnings;
 use cachert::application::registry::{APPLICATIONS, Entry};
 use cachert::image::Image;
+use cachert::integrator::{RenderOutput, RenderSettings, render};
 use cachert::metrics::rmse;
 use cachert::placement::registry::NAMES;
-use cachert::render::{RenderOutput, RenderSettings, render};
 use cachert::scene::{LoadOptions, load_str};
 
 /// Film size of every case.

@@ -4,8 +4,8 @@ use std::path::{Path, PathBuf};
 
 use cachert::error::Warnings;
 use cachert::image::{self, Image};
-use cachert::render::ao::AmbientOcclusion;
 use cachert::parse::integrator::IntegratorParams;
+use cachert::render::ao::AmbientOcclusion;
 use cachert::scene::shapes::{obj, ply};
 use cachert::scene::{LoadOptions, load_str};
 

@@ -6,7 +6,7 @@
 //! with every application.
 //!
 //! Adding an application: one file here implementing [`Application`] and one line in [`registry`]; the
-//! render stage's cache driver (`render::cache_driver`), `render --help`, `info` and `experiment` pick it up
+//! cache driver (`integrator::cache`), `render --help`, `info` and `experiment` pick it up
 //! from there.
 //!
 //! An application prepares what it reads from the scene once per render ([`Application::prepare`]: for

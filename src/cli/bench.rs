@@ -21,8 +21,8 @@ use serde::Serialize;
 use crate::application::Application;
 use crate::application::irradiance::IrradianceCache;
 use crate::error::{Error, Result, Warnings};
+use crate::integrator::{RenderSettings, render};
 use crate::os::{children_cpu_secs, process_cpu_secs};
-use crate::render::{RenderSettings, render};
 use crate::scene::{LoadOptions, load_str};
 
 /// pbrt-v3's user CPU seconds for each `ao-ref.pbrt` at its 256 AO rays (from `../shared/scenes/README.md`).

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::image::{Image, write};
-use crate::render::cache_driver::CachedOutput;
+use crate::integrator::cache::CachedOutput;
 
 const STAGE1: [f32; 3] = [1.0, 0.1, 0.05];
 const STAGE2: [f32; 3] = [0.0, 0.9, 1.0];

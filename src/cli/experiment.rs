@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use crate::application::registry;
 use crate::error::{Error, Result};
 use crate::experiment::{Sweep, run as run_sweep};
-use crate::render::cache_driver::Placement;
+use crate::integrator::cache::Placement;
 
 /// Flags of `cachert experiment`.
 #[derive(clap::Args, Debug, Clone)]

@@ -31,7 +31,7 @@ pub fn run(args: &InfoArgs) -> Result<String> {
     let kind = match crate::application::registry::entry(name) {
         Some(e) => format!("cache-based: {}", e.about),
         None if crate::render::INTEGRATORS.contains(&name) => "per-pixel".to_string(),
-        None => format!("not implemented; choose one with --integrator: {}", crate::render::integrator_names()),
+        None => format!("not implemented; choose one with --integrator: {}", crate::integrator::integrator_names()),
     };
     let _ = writeln!(o, "integrator  {integrator} ({kind})");
     let world_tris: usize = s.geometry.meshes.iter().map(|m| m.triangle_count()).sum();

@@ -34,8 +34,8 @@ use serde::Serialize;
 use crate::error::{Error, Result, Warnings};
 use crate::experiment::summary::Summary;
 use crate::image::{self, Image};
+use crate::integrator::{RenderSettings, render};
 use crate::metrics::{Metric, compare, rmse};
-use crate::render::{RenderSettings, render};
 use crate::scene::{LoadOptions, load_str};
 
 use super::bench::BenchArgs;

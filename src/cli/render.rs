@@ -6,13 +6,13 @@ use std::path::{Path, PathBuf};
 
 use crate::application::registry;
 use crate::error::Result;
-use crate::render::cache_driver::{CacheOverrides, Placement};
-use crate::render::{RenderSettings, render};
+use crate::integrator::cache::{CacheOverrides, Placement};
+use crate::integrator::{RenderSettings, render};
 use crate::scene::{LoadOptions, load};
 
 /// Flags of `cachert render`.
 #[derive(clap::Args, Debug, Clone)]
-#[command(after_long_help = crate::render::cache_driver::help())]
+#[command(after_long_help = crate::integrator::cache::help())]
 pub struct RenderArgs {
     /// The pbrt-v3 scene file.
     pub scene: PathBuf,

@@ -319,7 +319,7 @@ fn draw<DB: DrawingBackend>(plot: &Plot, root: &DrawingArea<DB, Shift>) -> std::
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::cache_driver::stats::{CacheStats, StageTimes};
+    use crate::integrator::cache::stats::{CacheStats, StageTimes};
 
     #[test]
     fn log_axes_label_every_decade_they_span() {

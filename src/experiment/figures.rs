@@ -13,7 +13,7 @@ use super::chart::{self, Plot, Point, XAxis};
 use super::jobs::Record;
 use super::summary::{ok, pairs, total, varied_one};
 use crate::error::Result;
-use crate::render::cache_driver::stats::{CacheStats, StageTimes};
+use crate::integrator::cache::stats::{CacheStats, StageTimes};
 
 /// A chart's file and what it shows.
 #[derive(Clone, Debug, PartialEq)]

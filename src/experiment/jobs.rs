@@ -18,8 +18,8 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::image::Image;
+use crate::integrator::cache::stats::StageTimes;
 use crate::metrics::{Metric, compare};
-use crate::render::cache_driver::stats::StageTimes;
 
 use super::spec::{Job, Spec};
 
@@ -57,7 +57,7 @@ pub fn argv(job: &Job, out: &Path) -> Vec<String> {
         a.push(format!("{k}={v}"));
     }
     a.push("--quiet".into());
-    if job.seed == 0 && job.placement != crate::render::cache_driver::Placement::REFERENCE {
+    if job.seed == 0 && job.placement != crate::integrator::cache::Placement::REFERENCE {
         // The report shows where the caches went in one run per method.
         a.push("--overlay".into());
         a.push(runs.join(format!("{}{OVERLAY}", job.id)).display().to_string());

@@ -16,10 +16,10 @@ use serde::Serialize;
 use crate::application::registry;
 use crate::error::{Error, Result, Warnings};
 use crate::image::Image;
+use crate::integrator::cache::stats::{CacheStats, StageTimes};
+use crate::integrator::cache::{CacheOverrides, CachedOutput, Placement};
+use crate::integrator::{RenderSettings, render};
 use crate::metrics::{Metric, compare};
-use crate::render::cache_driver::stats::{CacheStats, StageTimes};
-use crate::render::cache_driver::{CacheOverrides, CachedOutput, Placement};
-use crate::render::{RenderSettings, render};
 use crate::scene::{LoadOptions, LoadedScene, load};
 
 pub mod chart;
@@ -103,7 +103,7 @@ fn tag(pairs: &[&(String, String)]) -> String {
 /// Whether a parameter only changes where caches go (σ_a, `sdminsize`, `ratio`, …), not the reference:
 /// the cache driver's generic parameters except `subpixels` and `seed`.
 fn placement_only(k: &str) -> bool {
-    k != "subpixels" && k != "seed" && crate::render::cache_driver::PARAMETERS.iter().any(|p| p.name == k)
+    k != "subpixels" && k != "seed" && crate::integrator::cache::PARAMETERS.iter().any(|p| p.name == k)
 }
 
 fn name_of(p: &Path) -> String {

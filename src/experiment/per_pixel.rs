@@ -13,11 +13,11 @@ use crate::application::registry::{self, WithApplication};
 use crate::application::{Application, Baseline};
 use crate::error::{Error, Result, Warnings};
 use crate::image::Image;
+use crate::integrator::cache::stats::{CacheStats, StageTimes};
+use crate::integrator::{RenderSettings, render};
 use crate::metrics::{Metric, compare};
 use crate::parse::integrator::IntegratorParams;
 use crate::parse::{Named, ParamList};
-use crate::render::cache_driver::stats::{CacheStats, StageTimes};
-use crate::render::{RenderSettings, render};
 use crate::scene::filter::{Filter, FilterKind};
 use crate::scene::{LoadedScene, Scene};
 

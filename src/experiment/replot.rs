@@ -11,7 +11,7 @@ use std::sync::Arc;
 use super::Row;
 use super::chart;
 use crate::error::{Error, Result, SourceLoc};
-use crate::render::cache_driver::stats::{CacheStats, StageTimes};
+use crate::integrator::cache::stats::{CacheStats, StageTimes};
 
 /// The columns a chart needs, by their names in the header of `results.csv`.
 const NEEDED: [&str; 7] = ["scene", "placement", "caches", "seed", "rmse", "flip", "total_s"];

@@ -29,8 +29,8 @@ use serde::Deserialize;
 
 use crate::application::registry;
 use crate::error::{Error, Result, SourceLoc};
-use crate::render::cache_driver::Placement;
-use crate::render::cache_driver::settings::PAPER_PIXELS;
+use crate::integrator::cache::Placement;
+use crate::integrator::cache::settings::PAPER_PIXELS;
 
 /// A parameter value as written: a string, a number or a boolean (passed on as `--set KEY=VALUE`).
 #[derive(Clone, Debug, PartialEq, Deserialize)]

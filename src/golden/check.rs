@@ -8,9 +8,9 @@ use std::time::Instant;
 
 use crate::error::{Error, Result, Warnings};
 use crate::image::Image;
+use crate::integrator::cache::{CacheOverrides, Placement};
+use crate::integrator::{RenderSettings, render};
 use crate::metrics::{Metric, compare};
-use crate::render::cache_driver::{CacheOverrides, Placement};
-use crate::render::{RenderSettings, render};
 use crate::scene::{LoadOptions, load};
 
 use super::manifest::{Entry, Manifest, Recorded, Spec, file_name, resolve};

@@ -9,9 +9,9 @@
 use std::collections::BTreeMap;
 
 use crate::application::registry::APPLICATIONS;
+use crate::integrator::cache::Placement;
 use crate::placement::registry::NAMES;
 use crate::render::INTEGRATORS;
-use crate::render::cache_driver::Placement;
 
 use super::Spec;
 

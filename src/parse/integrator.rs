@@ -8,8 +8,8 @@
 
 use std::cell::RefCell;
 
-use crate::error::{Error, Result};
-use crate::parse::ParamList;
+use crate::error::{Error, Result, Warnings};
+use crate::parse::{Named, ParamList};
 
 /// Largest `maxdepth` any integrator accepts (each level may double the rays of a glass path).
 pub const MAX_DEPTH: i64 = 64;
@@ -99,6 +99,23 @@ impl<'a> IntegratorParams<'a> {
             }
         }
         Ok(())
+    }
+}
+
+/// Warns about Integrator parameters that the integrator did not read.
+pub fn report_unused(integrator: Option<&Named>, name: &str, set: &[(String, String)], warnings: &mut Warnings) {
+    if let Some(n) = integrator.filter(|n| n.name == name) {
+        for p in n.params.unused() {
+            // A parameter replaced by --set was not read because the command line won, not because it is unknown.
+            if p.name == "pixelbounds" {
+                warnings.at(
+                    &p.loc,
+                    "Integrator: \"pixelbounds\" is not supported; the whole film is rendered (Film \"cropwindow\" restricts it)",
+                );
+            } else if !set.iter().any(|(k, _)| *k == p.name) {
+                warnings.at(&p.loc, format!("Integrator: unused parameter \"{} {}\"", p.ty.word(), p.name));
+            }
+        }
     }
 }
 

@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use cachert::Warnings;
 use cachert::image::Image;
-use cachert::render::{RenderOutput, RenderSettings, render};
+use cachert::integrator::{RenderOutput, RenderSettings, render};
 use cachert::scene::{LoadOptions, LoadedScene, load, load_str};
 
 /// A fresh folder under the system temp dir, unique per process and call, removed when dropped.

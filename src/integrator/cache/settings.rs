@@ -1,4 +1,4 @@
-//! STAGE 6 (render): the generic parameters of every cache-based integrator (ALGORITHMS.md §7) — placement,
+//! STAGE 7 (integrator): the generic parameters of every cache-based integrator (ALGORITHMS.md §7) — placement,
 //! budget, lookup, sub-pixel samples, seed — with the paper's defaults, read once into typed
 //! [`CacheSettings`]. Each application reads its own parameters beside these (`Application::from_params`).
 //!

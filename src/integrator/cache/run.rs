@@ -1,4 +1,4 @@
-//! STAGE 6 (render): the one generic cache-based render driver (DESIGN.md §1, ALGORITHMS.md §0):
+//! STAGE 7 (integrator): the one generic cache-based render driver (DESIGN.md §1, ALGORITHMS.md §0):
 //! G-buffer → first-stage placement → evaluate caches → second-stage placement (evaluating what it adds)
 //! → kd-tree → shade every sub-pixel sample from its selected caches. Or, for [`Placement::Reference`], the
 //! per-sample reference: the application's brute-force answer at every sub-pixel sample. Each step is timed

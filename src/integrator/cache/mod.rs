@@ -1,7 +1,7 @@
-//! STAGE 6 (render): the cache driver — every cache-based integrator, whatever its application, renders
+//! STAGE 7 (integrator): the cache driver — every cache-based integrator, whatever its application, renders
 //! through here. [`render_with`] reads the generic parameters ([`settings::PARAMETERS`]) and the
 //! application's own (`Application::from_params`), names the scene settings a cache render cannot use, runs
-//! the generic driver ([`run::render_cached`]) and reports; `render::render` reaches it through the
+//! the generic driver ([`run::render_cached`]) and reports; `integrator::render` reaches it through the
 //! application registry by name ([`CacheRender`]), and a test can call it with an application of its own.
 //!
 //! Depends on `application` (the trait and registry), `placement`, `cache`, `gbuffer` and `scene`; no module
@@ -20,8 +20,10 @@ use crate::error::{Result, Warnings};
 use crate::parse::{Named, ParamList};
 use crate::scene::{Scene, filter};
 
-use super::{RenderOutput, RenderSettings, render_per_pixel_term, report_unused, with_threads};
+use super::{RenderOutput, RenderSettings, render_per_pixel_term};
+use crate::parse::integrator::report_unused;
 use crate::parse::integrator::{IntegratorParams, help_text};
+use crate::render::with_threads;
 
 /// Renders `scene` with cache application `A`: the scene's `Integrator` parameters (when it names `A`)
 /// and `settings.set` give both the generic and `A`'s parameters; `settings.cache` wins over them.
@@ -100,7 +102,7 @@ pub fn render_with<A: Application>(
     })
 }
 
-/// [`render_with`] as a registry visitor: `render::render` dispatches an integrator name through it.
+/// [`render_with`] as a registry visitor: `integrator::render` dispatches an integrator name through it.
 pub struct CacheRender<'a, 'w> {
     /// The scene.
     pub scene: &'a Scene,

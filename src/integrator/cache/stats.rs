@@ -1,4 +1,4 @@
-//! STAGE 6 (render): what a cache-based render reports — the stage times of the paper's Table 4, cache
+//! STAGE 7 (integrator): what a cache-based render reports — the stage times of the paper's Table 4, cache
 //! counts, the placement search results, rays and memory — as plain data that serialises to JSON.
 
 use serde::Serialize;

@@ -1,0 +1,143 @@
+//! STAGE 7 (integrator): every integrator by name — the per-pixel ones of `render` and the cache-based ones,
+//! each application of `application::registry` rendered by the one generic cache driver ([`cache`]) — with
+//! the settings a render takes beyond the scene file ([`RenderSettings`]) and what it produced
+//! ([`RenderOutput`]). [`render`] is the one by-name dispatch that the command line, the goldens and the
+//! experiments call.
+//!
+//! Depends on `render`, `application`, `placement`, `cache`, `gbuffer`, `shading`, `scene` and `parse`;
+//! only the studies (`golden`, `experiment`) and the command line depend on it.
+
+pub mod cache;
+
+use crate::application::registry;
+use crate::error::{Error, Result, Warnings};
+use crate::image::Image;
+use crate::parse::integrator::{IntegratorParams, report_unused};
+use crate::parse::{Named, ParamList};
+use crate::render::{INTEGRATORS, RayCounters, per_pixel_integrator, render_image, with_threads};
+use crate::scene::Scene;
+
+/// How to render, beyond what the scene file says.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct RenderSettings {
+    /// Seed of every random stream.
+    pub seed: u64,
+    /// Samples per pixel instead of the sampler's.
+    pub spp: Option<u32>,
+    /// Worker threads (default: all cores).
+    pub threads: Option<usize>,
+    /// Show a progress bar.
+    pub progress: bool,
+    /// pbrt-v3's `--quick` (integrator sample counts to 1).
+    pub quick: bool,
+    /// Integrator name instead of the scene's.
+    pub integrator: Option<String>,
+    /// Integrator parameters set on the command line (`--set key=value`), overriding the scene's.
+    pub set: Vec<(String, String)>,
+    /// Typed settings of cache-based integrators (`--placement`, `--caches`), winning over `set`.
+    pub cache: cache::CacheOverrides,
+}
+
+/// What a render produced.
+#[derive(Clone, Debug)]
+pub struct RenderOutput {
+    /// The cropped image.
+    pub image: Image,
+    /// Rays traced.
+    pub rays: RayCounters,
+    /// Wall seconds of the pixel loop.
+    pub render_secs: f64,
+    /// Samples per pixel used.
+    pub spp: u32,
+    /// The integrator that ran.
+    pub integrator: String,
+    /// Cache placement, statistics and maps of a cache-based render.
+    pub cache: Option<Box<cache::CachedOutput>>,
+}
+
+/// Every integrator name, per-pixel then cache-based, comma-separated (for messages).
+pub fn integrator_names() -> String {
+    let cached = registry::APPLICATIONS.iter().map(|e| e.name);
+    INTEGRATORS.iter().copied().chain(cached).collect::<Vec<_>>().join(", ")
+}
+
+/// The error for an integrator name that is neither per-pixel nor cache-based.
+fn not_implemented(name: &str) -> Error {
+    Error::usage(format!(
+        "integrator \"{name}\" is not implemented by cachert (available: {}); choose one with --integrator",
+        integrator_names()
+    ))
+}
+
+/// Builds the integrator named by the scene (or by `settings.integrator`) and renders.
+pub fn render(
+    scene: &Scene,
+    integrator: Option<&Named>,
+    settings: &RenderSettings,
+    warnings: &mut Warnings,
+) -> Result<RenderOutput> {
+    let empty = ParamList::default();
+    let scene_name = integrator.map_or("path", |n| n.name.as_str());
+    let name = settings.integrator.as_deref().unwrap_or(scene_name);
+    // Parameters written for another integrator do not apply to an override.
+    let params = match integrator {
+        Some(n) if n.name == name => &n.params,
+        _ => &empty,
+    };
+    let mut sampler = scene.sampler.clone();
+    if let Some(spp) = settings.spp {
+        if spp == 0 {
+            return Err(Error::usage("--spp must be at least 1"));
+        }
+        sampler.spp = spp;
+    }
+    if let Some(n) = integrator.filter(|n| n.name != name && !n.params.is_empty()) {
+        warnings.at(
+            &n.name_loc,
+            format!(
+                "Integrator \"{}\" is replaced by --integrator {name}; its parameters ({}) are not used",
+                n.name,
+                n.params.iter().map(|p| p.name.as_str()).collect::<Vec<_>>().join(", ")
+            ),
+        );
+    }
+    let cache = cache::CacheRender { scene, integrator, settings, warnings: &mut *warnings };
+    if let Some(out) = registry::dispatch(name, cache) {
+        return out;
+    }
+    if settings.cache != cache::CacheOverrides::default() {
+        return Err(Error::usage(format!(
+            "--placement and --caches apply to cache-based integrators ({}), not to \"{name}\"",
+            registry::names()
+        )));
+    }
+    let iparams = IntegratorParams::new(params, &settings.set);
+    let pixel = per_pixel_integrator(name, &iparams, scene, &sampler, settings.quick, warnings)?
+        .ok_or_else(|| not_implemented(name))?;
+    iparams.check_overrides(name)?;
+    report_unused(integrator, name, &settings.set, warnings);
+    let run = || render_image(scene, &sampler, pixel.as_ref(), settings.seed, settings.progress);
+    let (image, rays, render_secs) = with_threads(settings.threads, run)?;
+    Ok(RenderOutput { image, rays, render_secs, spp: sampler.spp, integrator: name.to_string(), cache: None })
+}
+
+/// Renders the per-pixel integrator `name` with parameters `set` only (the scene's `Integrator` line is
+/// not read) with the scene's Sampler and PixelFilter — `--spp` and `--quick` apply — for a cache
+/// application's per-pixel term. Runs in the current thread pool; returns the image, rays and wall time.
+pub(crate) fn render_per_pixel_term(
+    scene: &Scene,
+    name: &str,
+    set: &[(String, String)],
+    settings: &RenderSettings,
+    warnings: &mut Warnings,
+) -> Result<(Image, RayCounters, f64)> {
+    let mut sampler = scene.sampler.clone();
+    if let Some(spp) = settings.spp.filter(|&n| n > 0) {
+        sampler.spp = spp;
+    }
+    let empty = ParamList::default();
+    let iparams = IntegratorParams::new(&empty, set);
+    let pixel = per_pixel_integrator(name, &iparams, scene, &sampler, settings.quick, warnings)?
+        .ok_or_else(|| not_implemented(name))?;
+    Ok(render_image(scene, &sampler, pixel.as_ref(), settings.seed, settings.progress))
+}
