@@ -14,6 +14,7 @@
 //! | 5 | [`shading`] | textures, materials, lights: what a surface does with light |
 //! | 6 | [`render`] | the per-pixel integrators (`ambientocclusion`, `directlighting`, `path`) and their pixel loop |
 //! | 7 | [`integrator`] | every integrator by name, and `integrator::cache`, the one generic driver of every cache-based integrator |
+//! | 8 | [`job`] | one render job as data: load → render by name → write the image and cache outputs |
 //! | — | [`experiment`] | sweeps of placements × budgets × seeds against the per-sample reference |
 //! | — | [`golden`] | golden-image regression: a manifest of renders re-rendered and compared bit for bit |
 //! | — | [`sampling`] | random streams keyed by pixel, low-discrepancy sequences, warps, frames |
@@ -35,6 +36,7 @@ pub mod gbuffer;
 pub mod golden;
 pub mod image;
 pub mod integrator;
+pub mod job;
 pub mod metrics;
 pub mod os;
 pub mod parse;

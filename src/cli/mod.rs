@@ -3,7 +3,6 @@
 
 pub mod bench;
 pub mod bench_micro;
-pub mod cache_outputs;
 pub mod compare;
 pub mod experiment;
 pub mod golden;

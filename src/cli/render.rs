@@ -1,14 +1,15 @@
-//! `cachert render`: load a scene, render it with its integrator (or `--integrator`), write the image
-//! atomically, and print the time of each stage and the ray throughput.
+//! `cachert render`: the flags become a render job (`job::RenderJob`: load a scene, render it with its
+//! integrator or `--integrator`, write the image atomically), then the time of each stage and the ray
+//! throughput are printed.
 
 use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use crate::application::registry;
 use crate::error::Result;
+use crate::integrator::RenderSettings;
 use crate::integrator::cache::{CacheOverrides, Placement};
-use crate::integrator::{RenderSettings, render};
-use crate::scene::{LoadOptions, load};
+use crate::job::{Outputs, RenderJob};
+use crate::scene::LoadOptions;
 
 /// Flags of `cachert render`.
 #[derive(clap::Args, Debug, Clone)]
@@ -68,121 +69,34 @@ fn parse_placement(s: &str) -> std::result::Result<Placement, String> {
 
 /// Runs `cachert render`; returns the summary to print (empty with --quiet) and the warnings, already printed.
 pub fn run(args: &RenderArgs) -> Result<String> {
-    execute(args, &mut print_warnings)
+    let finished = job(args).run(&mut |w| {
+        for w in w.iter() {
+            eprintln!("{w}");
+        }
+    })?;
+    Ok(if args.quiet { String::new() } else { finished.summary() })
 }
 
-/// [`run`] with the warnings handed to `warn` instead of printed (an experiment keeps them in each run's
-/// log). The render is exactly the one the same command line makes.
-pub fn execute(args: &RenderArgs, warn: &mut dyn FnMut(&crate::error::Warnings)) -> Result<String> {
-    let loaded = load(&args.scene, LoadOptions { quick: args.quick, resolution: args.resolution })?;
-    let mut warnings = loaded.warnings.clone();
-    let settings = RenderSettings {
-        seed: args.seed,
-        spp: args.spp,
-        threads: args.nthreads,
-        progress: !args.quiet && std::io::stderr().is_terminal() && std::io::stdout().is_terminal(),
-        quick: args.quick,
-        integrator: args.integrator.clone(),
-        set: args.set.clone(),
-        cache: CacheOverrides { placement: args.placement, caches: args.caches, subpixels: None },
-    };
-    // Settle the output name before rendering, so a bad extension fails fast.
-    let out = output_path(args, &loaded.scene.film.filename);
-    crate::image::Format::from_path(&out)?;
-    let result = render(&loaded.scene, loaded.integrator.as_ref(), &settings, &mut warnings);
-    warn(&warnings);
-    let result = result?;
-    // Check every requested output before writing any, so a failed run leaves nothing behind.
-    let cache = result.cache.as_deref();
-    if (args.overlay.is_some() || args.dmap.is_some() || args.stats.is_some()) && cache.is_none() {
-        return Err(crate::Error::usage(format!(
-            "--overlay, --dmap and --stats need a cache-based integrator (--integrator with one of: {})",
-            registry::names()
-        )));
+/// The render job the flags describe.
+pub fn job(args: &RenderArgs) -> RenderJob {
+    RenderJob {
+        scene: args.scene.clone(),
+        load: LoadOptions { quick: args.quick, resolution: args.resolution },
+        settings: RenderSettings {
+            seed: args.seed,
+            spp: args.spp,
+            threads: args.nthreads,
+            progress: !args.quiet && std::io::stderr().is_terminal() && std::io::stdout().is_terminal(),
+            quick: args.quick,
+            integrator: args.integrator.clone(),
+            set: args.set.clone(),
+            cache: CacheOverrides { placement: args.placement, caches: args.caches, subpixels: None },
+        },
+        outputs: Outputs {
+            image: args.outfile.clone(),
+            overlay: args.overlay.clone(),
+            dmap: args.dmap.clone(),
+            stats: args.stats.clone(),
+        },
     }
-    if args.dmap.is_some() && cache.is_some_and(|c| c.discontinuity.is_none()) {
-        return Err(crate::Error::usage(
-            "--dmap: this placement has no discontinuity map (use vgc+dgs or one of its ablations)",
-        ));
-    }
-    for p in [&args.overlay, &args.dmap].into_iter().flatten() {
-        crate::image::Format::from_path(p)?;
-    }
-    crate::image::write(&result.image, &out)?;
-    if let Some(c) = cache {
-        if let Some(p) = &args.overlay {
-            crate::cli::cache_outputs::write_overlay(c, p)?;
-        }
-        if let Some(p) = &args.dmap {
-            crate::cli::cache_outputs::write_dmap(c, p)?;
-        }
-        if let Some(p) = &args.stats {
-            let settings = serde_json::json!({
-                "scene": args.scene.display().to_string(),
-                "integrator": result.integrator,
-                "seed": args.seed,
-                "set": args.set.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>(),
-                "parameters": c.settings,
-            });
-            crate::cli::cache_outputs::write_stats(c, &settings, p)?;
-        }
-    }
-    if args.quiet {
-        return Ok(String::new());
-    }
-    if let Some(c) = cache {
-        let rays = result.rays.total() as f64;
-        return Ok(format!(
-            "wrote {} ({}x{}, {} sub-pixel samples, {})\nparse {:.3} s | scene build {:.3} s | BVH build {:.3} s\n{}\nrays {:.1} M: {:.2} Mrays/s",
-            out.display(),
-            result.image.width,
-            result.image.height,
-            result.spp,
-            result.integrator,
-            loaded.stats.parse_secs,
-            loaded.stats.build_secs,
-            loaded.stats.bvh_secs,
-            c.stats.summary(),
-            rays / 1e6,
-            rays / 1e6 / c.stats.times.total.max(1e-9)
-        ));
-    }
-    let s = &loaded.stats;
-    let rays = result.rays.total() as f64;
-    Ok(format!(
-        "wrote {} ({}x{}, {} spp, {})\n\
-         parse {:.3} s | scene build {:.3} s | BVH build {:.3} s | render {:.3} s\n\
-         rays {:.1} M (camera {:.2} M, occlusion {:.2} M): {:.2} Mrays/s",
-        out.display(),
-        result.image.width,
-        result.image.height,
-        result.spp,
-        result.integrator,
-        s.parse_secs,
-        s.build_secs,
-        s.bvh_secs,
-        result.render_secs,
-        rays / 1e6,
-        result.rays.camera as f64 / 1e6,
-        result.rays.shadow as f64 / 1e6,
-        rays / 1e6 / result.render_secs.max(1e-9),
-    ))
-}
-
-/// Prints warnings to stderr, one per line.
-pub fn print_warnings(w: &crate::error::Warnings) {
-    for w in w.iter() {
-        eprintln!("{w}");
-    }
-}
-
-fn output_path(args: &RenderArgs, film_name: &Option<PathBuf>) -> PathBuf {
-    if let Some(o) = &args.outfile {
-        return o.clone();
-    }
-    if let Some(f) = film_name {
-        return f.clone();
-    }
-    let stem = args.scene.file_stem().unwrap_or(Path::new("cachert").as_os_str());
-    PathBuf::from(stem).with_extension("exr")
 }

@@ -1,25 +1,29 @@
-//! Running a spec's jobs and collecting what they wrote. Each job is one `cachert render` run that writes
-//! `runs/<id>.exr` and `runs/<id>.json` (its `--stats` report), and its warnings or error to `runs/<id>.log`.
+//! Running a spec's jobs and collecting what they wrote. Each job is one render job (what `cachert render`
+//! runs) that writes `runs/<id>.exr` and `runs/<id>.json` (its `--stats` report), and its warnings or error to `runs/<id>.log`.
 //! The jobs run in this process ([`run`]: resumable, since a job whose `.json` exists is skipped; locked,
 //! so two sweeps never write one folder), or are written out as command lines for a scheduler such as GNU
 //! parallel or a Slurm array ([`emit`]); either way [`collect`] then measures every run against its
 //! reference and writes `results.csv`, `results.json`, `table.md` and, per scene and application, charts of
 //! the error against time and against the number of caches. A failed run is a row with its message, not the end of the sweep.
 //!
-//! Depends on `cli::render` (the job *is* its command line), `image`, `metrics` and the chart writer.
+//! Depends on `job` (each run is a typed render job; its command line is only for `--emit-jobs`), `image`,
+//! `metrics` and the chart writer.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
-use clap::Parser;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::image::Image;
+use crate::integrator::RenderSettings;
 use crate::integrator::cache::stats::StageTimes;
+use crate::integrator::cache::{CacheOverrides, Placement};
+use crate::job::{Outputs, RenderJob};
 use crate::metrics::{Metric, compare};
+use crate::scene::LoadOptions;
 
 use super::spec::{Job, Spec};
 
@@ -35,38 +39,37 @@ pub const OVERLAY: &str = "-overlay.png";
 /// The lock file that keeps two sweeps from writing one folder.
 pub const LOCK: &str = ".cachert-experiment.lock";
 
-/// The arguments of `cachert` that render `job` into `out/runs/` (without the program name).
-pub fn argv(job: &Job, out: &Path) -> Vec<String> {
+/// The render job of `job` writing into `out/runs/`: the image, its `--stats` report, and for a seed-0
+/// cache run the overlay; `threads` workers. A placement name the registry does not know is an error.
+pub fn render_job(job: &Job, out: &Path, threads: Option<usize>) -> Result<RenderJob> {
     let runs = out.join(RUNS);
-    let mut a = vec![
-        "render".to_string(),
-        job.file.display().to_string(),
-        "--integrator".into(),
-        job.application.clone(),
-        "--placement".into(),
-        job.placement.clone(),
-        "--caches".into(),
-        job.caches.to_string(),
-        "--seed".into(),
-        job.seed.to_string(),
-        "--resolution".into(),
-        format!("{}x{}", job.resolution[0], job.resolution[1]),
-    ];
-    for (k, v) in &job.set {
-        a.push("--set".into());
-        a.push(format!("{k}={v}"));
-    }
-    a.push("--quiet".into());
-    if job.seed == 0 && job.placement != crate::integrator::cache::Placement::REFERENCE {
-        // The report shows where the caches went in one run per method.
-        a.push("--overlay".into());
-        a.push(runs.join(format!("{}{OVERLAY}", job.id)).display().to_string());
-    }
-    a.push("--outfile".into());
-    a.push(runs.join(format!("{}.exr", job.id)).display().to_string());
-    a.push("--stats".into());
-    a.push(runs.join(format!("{}.json", job.id)).display().to_string());
-    a
+    let placement = Placement::parse(&job.placement)?;
+    // The report shows where the caches went in one run per method.
+    let overlay =
+        (job.seed == 0 && placement != Placement::Reference).then(|| runs.join(format!("{}{OVERLAY}", job.id)));
+    Ok(RenderJob {
+        scene: job.file.clone(),
+        load: LoadOptions { quick: false, resolution: Some(job.resolution) },
+        settings: RenderSettings {
+            seed: job.seed,
+            threads,
+            integrator: Some(job.application.clone()),
+            set: job.set.clone(),
+            cache: CacheOverrides { placement: Some(placement), caches: Some(job.caches), subpixels: None },
+            ..Default::default()
+        },
+        outputs: Outputs {
+            image: Some(runs.join(format!("{}.exr", job.id))),
+            overlay,
+            dmap: None,
+            stats: Some(runs.join(format!("{}.json", job.id))),
+        },
+    })
+}
+
+/// The arguments of `cachert` that render `job` into `out/runs/` (without the program name).
+pub fn argv(job: &Job, out: &Path) -> Result<Vec<String>> {
+    Ok(render_job(job, out, None)?.argv())
 }
 
 /// `s` quoted for a POSIX shell when it needs it.
@@ -79,14 +82,14 @@ fn quote(s: &str) -> String {
 }
 
 /// One shell command line running `job` with the program `exe`, its stderr going to `runs/<id>.log`.
-pub fn command_line(job: &Job, out: &Path, exe: &str) -> String {
+pub fn command_line(job: &Job, out: &Path, exe: &str) -> Result<String> {
     let mut line = quote(exe);
-    for a in argv(job, out) {
+    for a in argv(job, out)? {
         line.push(' ');
         line.push_str(&quote(&a));
     }
     let log = out.join(RUNS).join(format!("{}.log", job.id));
-    format!("{line} 2> {}", quote(&log.display().to_string()))
+    Ok(format!("{line} 2> {}", quote(&log.display().to_string())))
 }
 
 /// Whether `job` has finished: its statistics file exists (it is written last, atomically).
@@ -151,33 +154,25 @@ pub fn lock(out: &Path) -> Result<Lock> {
 /// sees the same paths.
 pub fn emit(spec: &Spec, out: &Path, path: &Path, exe: &str) -> Result<usize> {
     std::fs::create_dir_all(out.join(RUNS)).map_err(|e| Error::file(out, format!("cannot create: {e}")))?;
-    let lines: Vec<String> = spec.jobs.iter().filter(|j| !done(j, out)).map(|j| command_line(j, out, exe)).collect();
+    let lines: Vec<String> =
+        spec.jobs.iter().filter(|j| !done(j, out)).map(|j| command_line(j, out, exe)).collect::<Result<_>>()?;
     let text: String = lines.iter().map(|l| format!("{l}\n")).collect();
     crate::image::write_bytes(path, text.as_bytes())?;
     Ok(lines.len())
 }
 
-/// Runs `job` in this process exactly as its command line would, writing its warnings (or its error) to
-/// `runs/<id>.log`; returns the error message of a failed run.
+/// Runs `job` in this process (the same render its command line makes), writing its warnings (or its
+/// error) to `runs/<id>.log`; returns the error message of a failed run.
 fn run_one(job: &Job, out: &Path, threads: Option<usize>) -> std::result::Result<(), String> {
-    let mut args = vec!["cachert".to_string()];
-    args.extend(argv(job, out));
-    if let Some(n) = threads {
-        args.push("--nthreads".into());
-        args.push(n.to_string());
-    }
     let mut log = String::new();
-    let result = match crate::cli::Cli::try_parse_from(&args) {
-        Ok(crate::cli::Cli { command: crate::cli::Command::Render(a) }) => crate::cli::render::execute(&a, &mut |w| {
+    let result = render_job(job, out, threads).and_then(|j| {
+        j.run(&mut |w| {
             for w in w.iter() {
                 let _ = writeln!(log, "{w}");
             }
         })
-        .map(|_| ())
-        .map_err(|e| e.to_string()),
-        Ok(_) => Err("not a render command".to_string()),
-        Err(e) => Err(e.to_string()),
-    };
+    });
+    let result = result.map(|_| ()).map_err(|e| e.to_string());
     if let Err(e) = &result {
         let _ = writeln!(log, "error: {e}");
     }

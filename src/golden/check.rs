@@ -1,17 +1,18 @@
 //! Rendering a golden entry and comparing it with its image: `check` (re-render and compare every entry)
 //! and `update` (re-render and rewrite entries, saying what moved), plus `add` for a user's own goldens.
 //!
-//! Depends on `scene`, `render`, `image` and `metrics`.
+//! Depends on `job` (rendering an entry), `integrator` (its settings), `image` and `metrics`.
 
 use std::path::Path;
 use std::time::Instant;
 
 use crate::error::{Error, Result, Warnings};
 use crate::image::Image;
+use crate::integrator::RenderSettings;
 use crate::integrator::cache::{CacheOverrides, Placement};
-use crate::integrator::{RenderSettings, render};
+use crate::job::RenderJob;
 use crate::metrics::{Metric, compare};
-use crate::scene::{LoadOptions, load};
+use crate::scene::LoadOptions;
 
 use super::manifest::{Entry, Manifest, Recorded, Spec, file_name, resolve};
 use super::provenance::{self, Provenance};
@@ -33,18 +34,22 @@ pub struct Rendered {
 pub fn render_spec(dir: &Path, spec: &Spec, threads: Option<usize>) -> Result<Rendered> {
     let start = Instant::now();
     let placement = spec.placement.as_deref().map(Placement::parse).transpose()?;
-    let loaded = load(&resolve(dir, &spec.scene), LoadOptions { resolution: spec.resolution, quick: false })?;
-    let settings = RenderSettings {
-        seed: spec.seed,
-        spp: spec.spp,
-        threads,
-        progress: false,
-        quick: false,
-        integrator: Some(spec.integrator.clone()),
-        set: spec.set.iter().map(|(k, v)| (k.clone(), v.clone())).collect(),
-        cache: CacheOverrides { placement, caches: spec.caches, subpixels: None },
+    let job = RenderJob {
+        scene: resolve(dir, &spec.scene),
+        load: LoadOptions { resolution: spec.resolution, quick: false },
+        settings: RenderSettings {
+            seed: spec.seed,
+            spp: spec.spp,
+            threads,
+            progress: false,
+            quick: false,
+            integrator: Some(spec.integrator.clone()),
+            set: spec.set.iter().map(|(k, v)| (k.clone(), v.clone())).collect(),
+            cache: CacheOverrides { placement, caches: spec.caches, subpixels: None },
+        },
+        outputs: Default::default(),
     };
-    let out = render(&loaded.scene, loaded.integrator.as_ref(), &settings, &mut Warnings::default())?;
+    let out = job.render(&mut Warnings::default())?;
     let settings = match &out.cache {
         Some(c) => c.settings.clone(),
         None => [("spp".to_string(), serde_json::Value::from(out.spp))].into_iter().collect(),

@@ -1,0 +1,228 @@
+//! STAGE 8 (job): one render job, typed — load a scene, render it with an integrator by name, write the
+//! image and the cache outputs asked for (overlay, discontinuity map, statistics) — the one path by which
+//! `cachert render`, the experiments and the goldens render. A job is data ([`RenderJob`]); its command
+//! line ([`RenderJob::argv`]) exists only to hand jobs to another scheduler (`experiment --emit-jobs`).
+//!
+//! Depends on `integrator` (the by-name dispatch), `scene` (loading) and `image`; only the studies and the
+//! command line depend on it.
+
+pub mod cache_outputs;
+
+use std::path::{Path, PathBuf};
+
+use crate::application::registry;
+use crate::error::{Error, Result, Warnings};
+use crate::integrator::{RenderOutput, RenderSettings, render};
+use crate::scene::{LoadOptions, LoadStats, load};
+
+/// Files a job writes.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Outputs {
+    /// The image (`.exr`, `.pfm` or `.png`); `None`: the Film's `"filename"`, else the scene's stem with
+    /// `.exr`, in the current folder.
+    pub image: Option<PathBuf>,
+    /// Cache-based renders: the image with stage-1 caches (red) and stage-2 caches (cyan) marked.
+    pub overlay: Option<PathBuf>,
+    /// Cache-based renders: the DGS discontinuity map (EXR/PFM, plus a PNG preview).
+    pub dmap: Option<PathBuf>,
+    /// Cache-based renders: per-stage times, cache counts, search results, rays and memory as JSON.
+    pub stats: Option<PathBuf>,
+}
+
+/// A render job: what `cachert render` is given, as data.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct RenderJob {
+    /// The pbrt-v3 scene file.
+    pub scene: PathBuf,
+    /// `--quick` and `--resolution`, applied while loading.
+    pub load: LoadOptions,
+    /// Everything else that decides the image.
+    pub settings: RenderSettings,
+    /// What to write.
+    pub outputs: Outputs,
+}
+
+/// A finished job.
+#[derive(Debug)]
+pub struct Finished {
+    /// Where the image went.
+    pub image_path: PathBuf,
+    /// What the render produced.
+    pub output: RenderOutput,
+    /// The times of loading.
+    pub load: LoadStats,
+}
+
+impl RenderJob {
+    /// Loads the scene and renders it, writing nothing; the warnings of both go to `warnings`, whether or
+    /// not the render succeeds.
+    pub fn render(&self, warnings: &mut Warnings) -> Result<RenderOutput> {
+        let loaded = load(&self.scene, self.load)?;
+        warnings.extend(loaded.warnings);
+        render(&loaded.scene, loaded.integrator.as_ref(), &self.settings, warnings)
+    }
+
+    /// Renders and writes every output, all or nothing: each requested output is checked before the
+    /// render and before any file is written, and every file is written atomically. The warnings are handed
+    /// to `warn` once, before an error is returned.
+    pub fn run(&self, warn: &mut dyn FnMut(&Warnings)) -> Result<Finished> {
+        let loaded = load(&self.scene, self.load)?;
+        let mut warnings = loaded.warnings.clone();
+        // Settle the output name before rendering, so a bad extension fails fast.
+        let image_path = self.image_path(&loaded.scene.film.filename);
+        crate::image::Format::from_path(&image_path)?;
+        let result = render(&loaded.scene, loaded.integrator.as_ref(), &self.settings, &mut warnings);
+        warn(&warnings);
+        let output = result?;
+        self.write(&output, &image_path)?;
+        Ok(Finished { image_path, output, load: loaded.stats })
+    }
+
+    /// The image's path: [`Outputs::image`], else the Film's name, else the scene's stem with `.exr`.
+    fn image_path(&self, film_name: &Option<PathBuf>) -> PathBuf {
+        if let Some(o) = &self.outputs.image {
+            return o.clone();
+        }
+        if let Some(f) = film_name {
+            return f.clone();
+        }
+        let stem = self.scene.file_stem().unwrap_or(Path::new("cachert").as_os_str());
+        PathBuf::from(stem).with_extension("exr")
+    }
+
+    /// Writes the image and the cache outputs, checking every requested output before writing any.
+    fn write(&self, result: &RenderOutput, image_path: &Path) -> Result<()> {
+        let o = &self.outputs;
+        let cache = result.cache.as_deref();
+        if (o.overlay.is_some() || o.dmap.is_some() || o.stats.is_some()) && cache.is_none() {
+            return Err(Error::usage(format!(
+                "--overlay, --dmap and --stats need a cache-based integrator (--integrator with one of: {})",
+                registry::names()
+            )));
+        }
+        if o.dmap.is_some() && cache.is_some_and(|c| c.discontinuity.is_none()) {
+            return Err(Error::usage(
+                "--dmap: this placement has no discontinuity map (use vgc+dgs or one of its ablations)",
+            ));
+        }
+        for p in [&o.overlay, &o.dmap].into_iter().flatten() {
+            crate::image::Format::from_path(p)?;
+        }
+        crate::image::write(&result.image, image_path)?;
+        if let Some(c) = cache {
+            if let Some(p) = &o.overlay {
+                cache_outputs::write_overlay(c, p)?;
+            }
+            if let Some(p) = &o.dmap {
+                cache_outputs::write_dmap(c, p)?;
+            }
+            if let Some(p) = &o.stats {
+                let s = &self.settings;
+                let settings = serde_json::json!({
+                    "scene": self.scene.display().to_string(),
+                    "integrator": result.integrator,
+                    "seed": s.seed,
+                    "set": s.set.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>(),
+                    "parameters": c.settings,
+                });
+                cache_outputs::write_stats(c, &settings, p)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The job as `cachert` arguments (without the program name), for a scheduler that runs command lines;
+    /// `cachert` given them renders the same image. `--set` pairs come after the typed flags, as the typed
+    /// settings win over them.
+    pub fn argv(&self) -> Vec<String> {
+        let s = &self.settings;
+        let mut a = vec!["render".to_string(), self.scene.display().to_string()];
+        let mut flag = |name: &str, value: String| {
+            a.push(format!("--{name}"));
+            a.push(value);
+        };
+        if let Some(i) = &s.integrator {
+            flag("integrator", i.clone());
+        }
+        if let Some(p) = &s.cache.placement {
+            flag("placement", p.to_string());
+        }
+        if let Some(c) = s.cache.caches {
+            flag("caches", c.to_string());
+        }
+        flag("seed", s.seed.to_string());
+        if let Some([w, h]) = self.load.resolution {
+            flag("resolution", format!("{w}x{h}"));
+        }
+        if let Some(n) = s.spp {
+            flag("spp", n.to_string());
+        }
+        if let Some(n) = s.threads {
+            flag("nthreads", n.to_string());
+        }
+        for (k, v) in &s.set {
+            flag("set", format!("{k}={v}"));
+        }
+        if self.load.quick {
+            a.push("--quick".into());
+        }
+        if !s.progress {
+            a.push("--quiet".into());
+        }
+        for (name, path) in [
+            ("overlay", &self.outputs.overlay),
+            ("outfile", &self.outputs.image),
+            ("stats", &self.outputs.stats),
+            ("dmap", &self.outputs.dmap),
+        ] {
+            if let Some(p) = path {
+                a.push(format!("--{name}"));
+                a.push(p.display().to_string());
+            }
+        }
+        a
+    }
+}
+
+impl Finished {
+    /// The end-of-run summary: the image written, load and render times, the cache driver's stage times
+    /// for a cache-based render, and the ray throughput.
+    pub fn summary(&self) -> String {
+        let (result, s) = (&self.output, &self.load);
+        let rays = result.rays.total() as f64;
+        if let Some(c) = result.cache.as_deref() {
+            return format!(
+                "wrote {} ({}x{}, {} sub-pixel samples, {})\nparse {:.3} s | scene build {:.3} s | BVH build {:.3} s\n{}\nrays {:.1} M: {:.2} Mrays/s",
+                self.image_path.display(),
+                result.image.width,
+                result.image.height,
+                result.spp,
+                result.integrator,
+                s.parse_secs,
+                s.build_secs,
+                s.bvh_secs,
+                c.stats.summary(),
+                rays / 1e6,
+                rays / 1e6 / c.stats.times.total.max(1e-9)
+            );
+        }
+        format!(
+            "wrote {} ({}x{}, {} spp, {})\n\
+             parse {:.3} s | scene build {:.3} s | BVH build {:.3} s | render {:.3} s\n\
+             rays {:.1} M (camera {:.2} M, occlusion {:.2} M): {:.2} Mrays/s",
+            self.image_path.display(),
+            result.image.width,
+            result.image.height,
+            result.spp,
+            result.integrator,
+            s.parse_secs,
+            s.build_secs,
+            s.bvh_secs,
+            result.render_secs,
+            rays / 1e6,
+            result.rays.camera as f64 / 1e6,
+            result.rays.shadow as f64 / 1e6,
+            rays / 1e6 / result.render_secs.max(1e-9),
+        )
+    }
+}
