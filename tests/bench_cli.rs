@@ -1,4 +1,4 @@
-//! `cachert bench` (src/cli/bench.rs) on a scenes folder of its own: `--repeat` times each row that many
+//! `cachert bench` (src/experiment/bench/) on a scenes folder of its own: `--repeat` times each row that many
 //! times and keeps the least CPU time, listing every run; the irradiance-caching comparison refuses it, and
 //! `--seeds` (its own) is refused elsewhere; `cachert bench micro --quick` runs every micro-benchmark on tiny
 //! inputs and prints its rows (what it prints about time is not checked).

@@ -188,14 +188,21 @@ fn every_registered_application_has_its_tables_in_the_readme_and_the_help() {
 #[test]
 fn no_file_of_src_outside_application_names_an_application() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    // The modules of the applications themselves (everything in application/ but the trait and the registry).
+    let modules: Vec<String> = std::fs::read_dir(src.join("application"))
+        .unwrap()
+        .map(|e| e.unwrap().path().file_stem().unwrap().to_string_lossy().into_owned())
+        .filter(|m| m != "mod" && m != "registry")
+        .collect();
+    assert!(modules.len() >= 3, "{modules:?}");
     let mut stack = vec![src.clone()];
     let mut files = 0;
     while let Some(dir) = stack.pop() {
         for entry in std::fs::read_dir(&dir).unwrap() {
             let path = entry.unwrap().path();
             // The benchmark against pbrt-v2's irradiance cache compares one application with an outside
-            // peer by design; nothing else outside `application/` may name one.
-            let peer_bench = ["cli/irc_peer.rs", "cli/peer_chart.rs"].map(|f| src.join(f));
+            // peer by design; nothing else outside `application/` may name one, by its name or its module.
+            let peer_bench = ["experiment/bench/irc_peer.rs", "experiment/bench/peer_chart.rs"].map(|f| src.join(f));
             if path == src.join("application") || peer_bench.contains(&path) {
                 continue;
             }
@@ -205,6 +212,10 @@ fn no_file_of_src_outside_application_names_an_application() {
                 let text = std::fs::read_to_string(&path).unwrap();
                 for e in APPLICATIONS {
                     assert!(!text.contains(e.name), "{} names \"{}\"", path.display(), e.name);
+                }
+                for m in &modules {
+                    let import = format!("application::{m}");
+                    assert!(!text.contains(&import), "{} imports {import}", path.display());
                 }
                 files += 1;
             }

@@ -1,14 +1,10 @@
 //! The subcommands of the `cachert` binary, as library functions returning the text to print, so tests
 //! can call them; `main.rs` only parses flags, prints and maps errors to exit status 2.
 
-pub mod bench;
-pub mod bench_micro;
 pub mod compare;
 pub mod experiment;
 pub mod golden;
 pub mod info;
-pub mod irc_peer;
-pub mod peer_chart;
 pub mod render;
 
 /// `cachert` — render pbrt-v3 scenes with cache-based algorithms.
@@ -30,7 +26,7 @@ pub enum Command {
     /// Compare an image with a reference (RMSE, relMSE, HDR-FLIP, LDR-FLIP).
     Compare(compare::CompareArgs),
     /// Time the pbrt-v3 reference scenes against pbrt-v3's own CPU times (`bench micro`: single stages).
-    Bench(bench::BenchArgs),
+    Bench(crate::experiment::bench::BenchArgs),
     /// Sweep placements × budgets × seeds against the per-sample reference (RMSE, HDR-FLIP).
     Experiment(experiment::ExperimentArgs),
     /// Golden-image regression: check, update or add goldens (a folder with a MANIFEST.json).
@@ -58,7 +54,7 @@ pub fn run(cli: &Cli) -> crate::Result<Done> {
         Command::Render(a) => render::run(a).map(Done::from),
         Command::Info(a) => info::run(a).map(Done::from),
         Command::Compare(a) => compare::run(a).map(Done::from),
-        Command::Bench(a) => bench::run(a).map(Done::from),
+        Command::Bench(a) => crate::experiment::bench::run(a).map(Done::from),
         Command::Experiment(a) => experiment::run(a).map(Done::from),
         Command::Golden(a) => golden::run(a),
     }

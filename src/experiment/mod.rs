@@ -6,7 +6,11 @@
 //! comparison uses the application's own per-pixel baselines (`Application::baselines`; the first
 //! gives the converged image).
 //!
-//! Depends on `scene`, `render`, `application` (the registry), `image` and `metrics`; nothing depends on it.
+//! Benchmarks (`cachert bench`, [`bench`]) and the comparisons with pbrt-v2 and pbrt-v3 live here too: every
+//! study has this one home.
+//!
+//! Depends on `job` and `integrator` (rendering), `scene`, `application` (the registry), `image` and
+//! `metrics`; nothing but the command line depends on it.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -22,6 +26,7 @@ use crate::integrator::{RenderSettings, render};
 use crate::metrics::{Metric, compare};
 use crate::scene::{LoadOptions, LoadedScene, load};
 
+pub mod bench;
 pub mod chart;
 pub mod figures;
 pub mod jobs;

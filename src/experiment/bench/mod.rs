@@ -9,6 +9,15 @@
 //! measured; without it, the recorded 256-ray figures of `../shared/scenes/README.md` are used where they
 //! apply. A benchmark prints figures from one run and asserts nothing (the machine is shared and noisy);
 //! `--json` keeps them in a file so that quoted figures come from one.
+//!
+//! A study (beside the sweeps of `experiment`): [`micro`] times single stages, [`irc_peer`] compares
+//! irradiance caching with pbrt-v2's. Its flags are derived on [`BenchArgs`] here, so that the one list of a
+//! benchmark's settings is also its command line; `cli` only dispatches to [`run`]. Depends on
+//! `integrator`, `scene`, `os` and `metrics`; nothing but the command line depends on it.
+
+pub mod irc_peer;
+pub mod micro;
+pub mod peer_chart;
 
 use std::fmt::Write;
 use std::io::Write as _;
@@ -18,8 +27,6 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::application::Application;
-use crate::application::irradiance::IrradianceCache;
 use crate::error::{Error, Result, Warnings};
 use crate::integrator::{RenderSettings, render};
 use crate::os::{children_cpu_secs, process_cpu_secs};
@@ -95,7 +102,7 @@ pub struct BenchArgs {
 #[derive(clap::Subcommand, Debug, Clone)]
 pub enum BenchCommand {
     /// Benchmarks of single stages, one run each: flip, ply, placement, selection, parse (default: all).
-    Micro(super::bench_micro::MicroArgs),
+    Micro(micro::MicroArgs),
 }
 
 /// The scenes `directlighting` and `path` are timed on (the bench scenes with light sources).
@@ -212,7 +219,7 @@ fn run_pbrt(pbrt: &Path, text: &str, dir: &Path, threads: usize) -> Result<f64> 
 /// Runs the benchmark and returns its table (and writes it to `--json`).
 pub fn run(args: &BenchArgs) -> Result<String> {
     if let Some(BenchCommand::Micro(micro)) = &args.command {
-        return super::bench_micro::run(micro);
+        return micro::run(micro);
     }
     if !args.scenes.is_dir() {
         return Err(Error::usage(format!("{}: no such folder (pass --scenes)", args.scenes.display())));
@@ -220,14 +227,14 @@ pub fn run(args: &BenchArgs) -> Result<String> {
     if args.nsamples.contains(&0) {
         return Err(Error::usage("--nsamples: ray counts must be at least 1"));
     }
-    if args.integrator == <IrradianceCache as Application>::NAME {
-        return super::irc_peer::run(args);
+    if args.integrator == irc_peer::INTEGRATOR {
+        return irc_peer::run(args);
     }
     if args.seeds > 1 {
         return Err(Error::usage(format!(
             "--seeds applies to the irradiance-caching comparison (--integrator {}); the other rows are timings \
              of one image",
-            <IrradianceCache as Application>::NAME
+            irc_peer::INTEGRATOR
         )));
     }
     // pbrt-v3 runs in each scene's folder, so a relative path must be made absolute first.

@@ -31,6 +31,8 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use crate::application::Application;
+use crate::application::irradiance::IrradianceCache;
 use crate::error::{Error, Result, Warnings};
 use crate::experiment::summary::Summary;
 use crate::image::{self, Image};
@@ -38,10 +40,13 @@ use crate::integrator::{RenderSettings, render};
 use crate::metrics::{Metric, compare, rmse};
 use crate::scene::{LoadOptions, load_str};
 
-use super::bench::BenchArgs;
+use super::BenchArgs;
 use crate::os::{children_cpu_secs, process_cpu_secs};
 
 /// The scene folder under `--scenes`.
+/// The cache application this peer comparison is about: pbrt-v2's `irradiancecache` against ours.
+pub const INTEGRATOR: &str = <IrradianceCache as Application>::NAME;
+
 const SCENE: &str = "bitterli-cornell-box-v3";
 /// pbrt-v2's settings: (minweight, nsamples). Its defaults are 0.5 and 4096.
 const PBRT_V2_SETTINGS: [(f32, u32); 7] =
