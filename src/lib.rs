@@ -1,27 +1,23 @@
 //! cachert — a renderer for pbrt-v3 scene files built around cache-based rendering, where *where the
 //! caches go* is a switchable strategy.
 //!
-//! The pipeline, one module per stage (see `DESIGN.md` in the shared documents):
+//! One layer per module, lowest first; a module imports only from lower layers (`ARCHITECTURE.md` has the
+//! rules and where new work goes; `tests/layers.rs` checks them):
 //!
-//! | stage | module | what it does |
+//! | layer | module | what it does |
 //! |---|---|---|
-//! | 1 | [`parse`] | scene text → directives with file:line:col |
-//! | 2 | [`scene`] | directives → camera, film, shapes, instances, BVH |
-//! | 3 | [`gbuffer`] | one shading point per pixel centre: what placement reads and shading starts from |
-//! | 4 | [`placement`] | where caches go: the strategies (IM, SD, VGC; AS, DGS) and their registry by name |
-//! | 5 | [`cache`] | the kd-tree over cache positions and the selection of a sample's caches (Eq. 5) |
-//! | 5 | [`application`] | what a cache holds: one file per cache-based application (the `Application` trait) and `application::registry`, the one list of them — **the seam for a new application** |
-//! | 5 | [`shading`] | textures, materials, lights: what a surface does with light |
-//! | 6 | [`render`] | the per-pixel integrators (`ambientocclusion`, `directlighting`, `path`) and their pixel loop |
-//! | 7 | [`integrator`] | every integrator by name, and `integrator::cache`, the one generic driver of every cache-based integrator |
-//! | 8 | [`job`] | one render job as data: load → render by name → write the image and cache outputs |
-//! | — | [`experiment`] | sweeps of placements × budgets × seeds against the per-sample reference |
-//! | — | [`golden`] | golden-image regression: a manifest of renders re-rendered and compared bit for bit |
-//! | — | [`sampling`] | random streams keyed by pixel, low-discrepancy sequences, warps, frames |
-//! | — | [`image`] | f32 RGB images; EXR, PFM and PNG in and out |
-//! | — | [`metrics`] | RMSE, relMSE, HDR-FLIP |
-//! | — | [`os`] | probes of the system: CPU time, peak and available memory |
-//! | — | [`cli`] | the subcommands of the `cachert` binary |
+//! | 0 | [`error`], [`os`] | errors with file:line:col; probes of the system (CPU time, memory) |
+//! | 1 | [`parse`] | stage 1: scene text → directives with file:line:col; integrator parameters (`parse::integrator`) |
+//! | 1 | [`image`], [`sampling`], [`cache`] | f32 RGB images and their files; random streams, sequences, pixel samples, warps; the kd-tree over caches and the selection of a sample's caches (Eq. 5) |
+//! | 2 | [`scene`], [`metrics`] | stage 2: directives → camera, film, shapes, instances, BVH; RMSE, relMSE, HDR-FLIP |
+//! | 3 | [`gbuffer`], [`shading`] | stage 3: one shading point per pixel centre; textures, materials, lights and the direct-light estimators |
+//! | 4 | [`placement`] | stage 4: where caches go: the strategies (IM, SD, VGC; AS, DGS) and their registry by name |
+//! | 4 | [`application`] | what a cache holds: one module per cache-based application (the `Application` trait) and `application::registry`, the one list of them — **the seam for a new application** |
+//! | 4 | [`render`] | the per-pixel integrators (`ambientocclusion`, `directlighting`, `path`) and their pixel loop |
+//! | 5 | [`integrator`] | every integrator by name, and `integrator::cache`, the one generic driver of every cache-based integrator |
+//! | 6 | [`job`] | one render job as data: load → render by name → write the image and cache outputs |
+//! | 7 | [`golden`], [`experiment`] | the studies: golden-image regression; sweeps, benchmarks and the pbrt peers |
+//! | 8 | [`cli`] | the subcommands of the `cachert` binary: flags → library calls |
 //!
 //! Errors from user input are [`error::Error`]s with locations; nothing reachable from a scene file or a flag
 //! panics.
