@@ -421,6 +421,13 @@ fn the_conservative_technique_keeps_vpls_occluded_at_the_caches_reachable() {
     assert!(z > 4.0, "F alone should lose the light of VPLs occluded at its caches (worst z {z:.2})");
 }
 
+/// The shared scenes must be here: fails, with the reason, where they are absent (outside CI the tests that
+/// need them print a `skipped` line and pass; under CI they fail too).
+#[test]
+fn shared_scenes_present() {
+    common::assert_shared_scenes_present();
+}
+
 #[test]
 fn the_vpl_solution_matches_pbrt_v3_path_on_the_cornell_box() {
     // pbrt-v3 `path` maxdepth 5 = a camera vertex plus light paths of up to 4 surface vertices. Without the
@@ -430,10 +437,7 @@ fn the_vpl_solution_matches_pbrt_v3_path_on_the_cornell_box() {
     // sample: over the whole image the emitter's edge pixels would dominate the mean's noise. Measured: 8
     // VPL seeds of 8192 VPLs, −0.37 % (seeds within ±1.3 %, standard error of the mean 0.27 %); 4 seeds of
     // 16384 at 64², −0.10 %. A light path one vertex too short or too long moves the mean by −2.7 % / +2.2 %.
-    let Some(dir) = common::shared_scenes() else {
-        eprintln!("skipped: ../shared/scenes is absent");
-        return;
-    };
+    let Some(dir) = common::shared_scenes() else { return };
     let dir = dir.join("bitterli-cornell-box-v3");
     let reference = common::downsample(&cachert::image::read(&dir.join("path-ref.pfm")).unwrap(), 8);
     let (w, h) = (reference.width, reference.height);

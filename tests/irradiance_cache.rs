@@ -283,6 +283,13 @@ const SHARED: &[(&str, &str)] = &[
     ("hackmad-pbrt-v3-rs-tests", "objects/instances.pbrt"),
 ];
 
+/// The shared scenes must be here: fails, with the reason, where they are absent (outside CI the tests that
+/// need them print a `skipped` line and pass; under CI they fail too).
+#[test]
+fn shared_scenes_present() {
+    common::assert_shared_scenes_present();
+}
+
 #[test]
 fn every_shared_scene_renders_finite_pixels() {
     let Some(root) = common::shared_scenes() else { return };

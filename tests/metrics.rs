@@ -1,20 +1,19 @@
 //! Behaviour of the metrics as experiments use them: agreement with NVIDIA's FLIP on the shared test
 //! vectors, known answers, thread-count independence, and the `compare` command end to end.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
 use cachert::image::{self, Image};
 use cachert::metrics::{self, Metric, flip};
+use common::flip_vectors;
 
-/// The shared FLIP test vectors, or `None` (with a printed reason) when the checkout has no `../shared`.
-fn flip_vectors() -> Option<PathBuf> {
-    let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/flip-vectors"));
-    if dir.join("expected.txt").is_file() {
-        Some(dir)
-    } else {
-        eprintln!("skipped: {} not found (the shared test vectors live next to the checkout)", dir.display());
-        None
-    }
+/// The shared FLIP test vectors must be here: fails, with the reason, where they are absent (outside CI the
+/// test that needs them prints a `skipped` line and passes; under CI it fails too).
+#[test]
+fn shared_flip_vectors_present() {
+    common::assert_flip_vectors_present();
 }
 
 #[test]

@@ -1,5 +1,5 @@
-//! Correctness against pbrt-v3 itself, on real third-party scenes in `../shared/scenes` (skipped, with a
-//! printed reason, when that folder is absent).
+//! Correctness against pbrt-v3 itself, on real third-party scenes in `../shared/scenes`. Where that folder
+//! is absent the tests fail under CI; elsewhere they print a `skipped` line and `shared_scenes_present` fails.
 //!
 //! Four scenes have `ao-ref.pbrt` rendered by pbrt-v3 into `ao-ref.pfm` and, with another sampler, into
 //! `ao-ref-b.pfm`: two independent estimates, so RMSE(ao-ref, ao-ref-b) is the Monte Carlo noise floor.
@@ -50,6 +50,13 @@ fn check_against_pbrt(scene: &str) {
     );
     assert!(ratio <= 1.3, "{scene}: RMSE {err} is {ratio:.3}× the noise-model RMSE {expected} (limit 1.3)");
     assert!(mean_dev <= 0.005, "{scene}: mean {ours} differs from pbrt-v3's {theirs} by {:.3} %", 100.0 * mean_dev);
+}
+
+/// The shared scenes must be here: fails, with the reason, where they are absent (outside CI the tests that
+/// need them print a `skipped` line and pass; under CI they fail too).
+#[test]
+fn shared_scenes_present() {
+    common::assert_shared_scenes_present();
 }
 
 #[test]

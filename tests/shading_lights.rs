@@ -527,6 +527,13 @@ fn point_spot_and_distant_lights_on_a_floor_match_pbrt_v3() {
     assert!(share < 0.01 && rmse < 0.01, "delta-light irradiance differs from pbrt-v3");
 }
 
+/// The shared scenes must be here: fails, with the reason, where they are absent (outside CI the tests that
+/// need them print a `skipped` line and pass; under CI they fail too).
+#[test]
+fn shared_scenes_present() {
+    common::assert_shared_scenes_present();
+}
+
 #[test]
 fn the_shared_scenes_lights_build() {
     let Some(dir) = common::shared_scenes() else { return };
@@ -538,21 +545,25 @@ fn the_shared_scenes_lights_build() {
         "pbrtv3scenes-buddha-fractal/buddha-fractal.pbrt",
     ]
     .iter()
-    .map(|f| dir.join(f))
+    .filter_map(|f| common::shared_file(&dir, f))
     .collect();
-    if let Ok(rd) = std::fs::read_dir(dir.join("hackmad-pbrt-v3-rs-tests/lights")) {
-        let mut extra: Vec<PathBuf> = rd
-            .filter_map(|e| e.ok().map(|e| e.path()))
+    if let Some(lights) = common::shared_file(&dir, "hackmad-pbrt-v3-rs-tests/lights") {
+        let mut extra: Vec<PathBuf> = std::fs::read_dir(&lights)
+            .unwrap_or_else(|e| panic!("{}: {e}", lights.display()))
+            .map(|e| e.expect("a readable folder entry").path())
             .filter(|p| p.extension().is_some_and(|e| e == "pbrt"))
             .collect();
         extra.sort();
+        assert!(!extra.is_empty(), "no .pbrt file in {}", lights.display());
         files.extend(extra);
     }
     for f in files {
+        // Every one of these loads today; one that stops loading (its assets gone from the shared copy, or a
+        // loader regression) is a failure under CI and a printed skip elsewhere.
         let loaded = match cachert::scene::load(&f, LoadOptions::default()) {
             Ok(l) => l,
             Err(e) => {
-                println!("{}: not loaded ({e}); skipped", f.display());
+                common::unavailable(&format!("{} does not load: {e}", f.display()));
                 continue;
             }
         };

@@ -226,6 +226,13 @@ fn bad_nurbs_are_located_errors() {
     }
 }
 
+/// The shared scenes must be here: fails, with the reason, where they are absent (outside CI the tests that
+/// need them print a `skipped` line and pass; under CI they fail too).
+#[test]
+fn shared_scenes_present() {
+    common::assert_shared_scenes_present();
+}
+
 #[test]
 fn hackmad_all_shapes_loopsubdiv_loads() {
     let Some(root) = shared_scenes() else { return };

@@ -2,6 +2,7 @@
 //! and one-call load-and-render.
 #![allow(dead_code)] // each test binary uses its own subset
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -67,15 +68,93 @@ pub fn header(res: u32, spp: u32, nsamples: u32) -> String {
     )
 }
 
-/// The third-party scenes folder next to the repository (`../shared/scenes`), or `None` with a printed
-/// reason when it is not there.
-pub fn shared_scenes() -> Option<PathBuf> {
-    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/scenes"));
-    if dir.is_dir() {
-        Some(dir.to_path_buf())
+/// Whether the tests run under CI: the environment variable `CI` set to anything but empty, `false` or `0`
+/// (CI services set `CI=true`). Under CI every piece of data a test needs must be there: its absence fails.
+pub fn in_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| {
+        let v = v.trim();
+        !(v.is_empty() || v == "0" || v.eq_ignore_ascii_case("false"))
+    })
+}
+
+/// The folder of third-party data beside the repository: `$CACHERT_SHARED` when set (so that the policy of
+/// [`unavailable`] can be tried without touching the real folder), else `CARGO_MANIFEST_DIR/../shared`.
+pub fn shared_root() -> PathBuf {
+    match std::env::var_os("CACHERT_SHARED") {
+        Some(dir) if !dir.is_empty() => PathBuf::from(dir),
+        _ => Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared"),
+    }
+}
+
+/// What a test does when data it needs is not here (`why` names it): under CI ([`in_ci`]) it fails with
+/// the reason; elsewhere it prints one line, `skipped <test>: <why>`, on stderr and the caller returns. Each
+/// test binary that reads shared data also has a test `shared_…_present` that fails whenever the data is
+/// absent, so a plain `cargo test` shows the skip as one failure instead of passing in silence.
+pub fn unavailable(why: &str) {
+    if in_ci() {
+        panic!("{why}; under CI (the environment variable CI is set) everything the tests need must be there");
+    }
+    // The harness names each test's thread after the test, and captures `eprintln!`: the line goes to the
+    // stream itself, in one write, so that a plain `cargo test` shows it whole.
+    let test = std::thread::current().name().unwrap_or("a test").to_string();
+    let _ = std::io::stderr().write_all(format!("skipped {test}: {why}\n").as_bytes());
+}
+
+/// `rel` under [`shared_root`] when `marker` (a file or folder inside it) is there, or why not.
+fn shared_path(rel: &str, marker: &str, what: &str) -> Result<PathBuf, String> {
+    let dir = shared_root().join(rel);
+    let needed = if marker.is_empty() { dir.clone() } else { dir.join(marker) };
+    if needed.exists() {
+        Ok(dir)
     } else {
-        eprintln!("skipped: {} is absent (third-party scenes and pbrt-v3 references live there)", dir.display());
+        Err(format!("{} is absent ({what} live there; CACHERT_SHARED names another copy)", needed.display()))
+    }
+}
+
+/// The shared scenes folder, or why it is not here.
+fn shared_scenes_dir() -> Result<PathBuf, String> {
+    shared_path("scenes", "", "the third-party scenes and their pbrt-v3 references")
+}
+
+/// The third-party scenes folder (`<shared>/scenes`), or `None` after [`unavailable`] (a failure under CI).
+pub fn shared_scenes() -> Option<PathBuf> {
+    shared_scenes_dir().map_err(|why| unavailable(&why)).ok()
+}
+
+/// A file that a test needs inside the shared scenes (`root` from [`shared_scenes`]), or `None` after
+/// [`unavailable`]: a partial copy of the folder skips outside CI and fails under it.
+pub fn shared_file(root: &Path, rel: &str) -> Option<PathBuf> {
+    let path = root.join(rel);
+    if path.exists() {
+        Some(path)
+    } else {
+        unavailable(&format!("{} is absent from the shared scenes", path.display()));
         None
+    }
+}
+
+/// Fails, whatever `CI` says, when the shared scenes are absent: the body of each binary's
+/// `shared_scenes_present` test.
+pub fn assert_shared_scenes_present() {
+    if let Err(why) = shared_scenes_dir() {
+        panic!("{why}: the tests that need them did not run");
+    }
+}
+
+/// The shared FLIP test vectors (`<shared>/flip-vectors`, with `expected.txt`), or `None` after
+/// [`unavailable`].
+pub fn flip_vectors() -> Option<PathBuf> {
+    flip_vectors_dir().map_err(|why| unavailable(&why)).ok()
+}
+
+fn flip_vectors_dir() -> Result<PathBuf, String> {
+    shared_path("flip-vectors", "expected.txt", "NVIDIA FLIP's test vectors")
+}
+
+/// Fails, whatever `CI` says, when the FLIP test vectors are absent.
+pub fn assert_flip_vectors_present() {
+    if let Err(why) = flip_vectors_dir() {
+        panic!("{why}: the tests that need them did not run");
     }
 }
 
