@@ -41,5 +41,7 @@ pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod shading;
+#[cfg(test)]
+mod test_support;
 
 pub use error::{Error, Result, SourceLoc, Warning, Warnings};

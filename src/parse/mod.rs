@@ -270,11 +270,7 @@ mod tests {
 
     #[test]
     fn every_shared_scene_parses() {
-        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes");
-        if !root.is_dir() {
-            eprintln!("skipped: no shared scene folder at {}", root.display());
-            return;
-        }
+        let Some(root) = crate::test_support::shared_scenes("") else { return };
         let mut files = Vec::new();
         pbrt_files(&root, &mut files);
         assert!(!files.is_empty(), "no .pbrt files under {}", root.display());

@@ -44,13 +44,8 @@ pub(crate) fn err(reader: Reader, ext: &str, bytes: &[u8]) -> String {
     }
 }
 
-/// `../shared/scenes/<dir>` beside the repository, or `None` (with the reason printed) when it is absent.
+/// `../shared/scenes/<dir>` beside the repository, or `None` when it is absent (a failure under CI; see
+/// `test_support`).
 pub(crate) fn scene_dir(dir: &str) -> Option<PathBuf> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes").join(dir);
-    if path.is_dir() {
-        Some(path)
-    } else {
-        eprintln!("skipping: {} is absent", path.display());
-        None
-    }
+    crate::test_support::shared_scenes(dir)
 }
