@@ -135,8 +135,8 @@ fn per_pixel(l: &mut LoadedScene, sweep: &Sweep, base: &Baseline, spp: u32, n: u
     let result = render(&l.scene, None, &settings, &mut Warnings::default());
     l.scene.filter = saved;
     let out = result?;
-    // The integrator's own render time, as cache runs report theirs (scene loading and light set-up left
-    // out of both).
+    // The integrator's own render time, as cache runs report theirs: scene loading left out of both, the
+    // light set-up (importance caching's VPLs) counted in both (the driver's total includes `prepare`).
     let secs = out.render_secs;
     let mut img = out.image;
     img.pixels.iter_mut().for_each(|p| p.iter_mut().for_each(|c| *c *= base.scale));

@@ -7,6 +7,8 @@
 //! | [`flip::hdr_flip_map`] | `flip` | mean HDR-FLIP (the paper's perceptual metric) |
 //! | [`flip::ldr_flip_map`] | `ldrflip` | mean LDR-FLIP of the images clamped to [0, 1] |
 //!
+//! [`pattern`] makes a synthetic HDR image for the metrics' tests and benchmarks.
+//!
 //! [`compare`] is the entry point experiments and golden tests call; [`evaluate`] also returns the FLIP
 //! maps. Both check that the sizes match and that the reference is finite. A NaN or infinity in the
 //! *test* image is not an error: it makes RMSE and relMSE NaN or infinite, and FLIP treats it exactly as
@@ -20,6 +22,7 @@
 
 pub mod colormap;
 pub mod flip;
+pub mod pattern;
 mod rmse;
 
 use std::fmt;

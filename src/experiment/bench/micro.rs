@@ -22,8 +22,8 @@ use glam::Vec3A;
 
 use crate::cache::{CacheIndex, LookupParams};
 use crate::error::{Error, Result, Warnings};
-use crate::image::Image;
 use crate::metrics::flip;
+use crate::metrics::pattern::pattern;
 use crate::os::process_cpu_secs;
 use crate::placement::synthetic::{MaskOracle, room};
 use crate::placement::{AdaptivePlacement, AdaptiveSampling, Discontinuity, ImageUniform, InitialPlacement};
@@ -118,31 +118,6 @@ pub fn run(args: &MicroArgs) -> Result<String> {
         })
     })?;
     Ok(table(&rows.0, threads, args.quick))
-}
-
-/// A deterministic pseudo-random value in [0, 1) from integers.
-fn hash01(a: u64, b: u64) -> f32 {
-    let mut h = a.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ b.wrapping_mul(0xC2B2_AE3D_27D4_EB4F);
-    h ^= h >> 31;
-    h = h.wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    h ^= h >> 29;
-    (h >> 40) as f32 / (1u64 << 24) as f32
-}
-
-/// An HDR-ish test pattern: smooth gradients, a few bright spots and noise scaled by `noise` (the same
-/// pattern as `tests/metrics.rs` builds).
-fn pattern(width: usize, height: usize, seed: u64, noise: f32) -> Image {
-    let mut im = Image::new(width, height);
-    for y in 0..height {
-        for x in 0..width {
-            let (u, v) = (x as f32 / width as f32, y as f32 / height as f32);
-            let base = 0.05 + 0.6 * u * v + if (x / 37 + y / 23) % 7 == 0 { 6.0 } else { 0.0 };
-            let i = (y * width + x) as u64;
-            let n = |c: u64| noise * (hash01(seed * 3 + c, i) - 0.5);
-            im.set(x, y, [(base + n(0)).max(0.0), (0.8 * base + n(1)).max(0.0), (0.5 * base * u + n(2)).max(0.0)]);
-        }
-    }
-    im
 }
 
 /// HDR-FLIP of a noisy pattern against the clean one.
