@@ -190,39 +190,28 @@ impl Finished {
     pub fn summary(&self) -> String {
         let (result, s) = (&self.output, &self.load);
         let rays = result.rays.total() as f64;
-        if let Some(c) = result.cache.as_deref() {
-            return format!(
-                "wrote {} ({}x{}, {} sub-pixel samples, {})\nparse {:.3} s | scene build {:.3} s | BVH build {:.3} s\n{}\nrays {:.1} M: {:.2} Mrays/s",
-                self.image_path.display(),
-                result.image.width,
-                result.image.height,
-                result.spp,
-                result.integrator,
-                s.parse_secs,
-                s.build_secs,
-                s.bvh_secs,
+        let cache = result.cache.as_deref();
+        let samples = if cache.is_some() { "sub-pixel samples" } else { "spp" };
+        let (w, h) = (result.image.width, result.image.height);
+        let wrote =
+            format!("wrote {} ({w}x{h}, {} {samples}, {})", self.image_path.display(), result.spp, result.integrator);
+        let load =
+            format!("parse {:.3} s | scene build {:.3} s | BVH build {:.3} s", s.parse_secs, s.build_secs, s.bvh_secs);
+        match cache {
+            Some(c) => format!(
+                "{wrote}\n{load}\n{}\nrays {:.1} M: {:.2} Mrays/s",
                 c.stats.summary(),
                 rays / 1e6,
                 rays / 1e6 / c.stats.times.total.max(1e-9)
-            );
+            ),
+            None => format!(
+                "{wrote}\n{load} | render {:.3} s\nrays {:.1} M (camera {:.2} M, occlusion {:.2} M): {:.2} Mrays/s",
+                result.render_secs,
+                rays / 1e6,
+                result.rays.camera as f64 / 1e6,
+                result.rays.shadow as f64 / 1e6,
+                rays / 1e6 / result.render_secs.max(1e-9),
+            ),
         }
-        format!(
-            "wrote {} ({}x{}, {} spp, {})\n\
-             parse {:.3} s | scene build {:.3} s | BVH build {:.3} s | render {:.3} s\n\
-             rays {:.1} M (camera {:.2} M, occlusion {:.2} M): {:.2} Mrays/s",
-            self.image_path.display(),
-            result.image.width,
-            result.image.height,
-            result.spp,
-            result.integrator,
-            s.parse_secs,
-            s.build_secs,
-            s.bvh_secs,
-            result.render_secs,
-            rays / 1e6,
-            result.rays.camera as f64 / 1e6,
-            result.rays.shadow as f64 / 1e6,
-            rays / 1e6 / result.render_secs.max(1e-9),
-        )
     }
 }
