@@ -6,7 +6,7 @@
 //! comparison uses the application's own per-pixel baselines (`Application::baselines`; the first
 //! gives the converged image).
 //!
-//! Benchmarks (`cachert bench`, [`bench`]) and the comparisons with pbrt-v2 and pbrt-v3 live here too: every
+//! Benchmarks (`cachert bench`, [`bench`](mod@bench)) and the comparisons with pbrt-v2 and pbrt-v3 live here too: every
 //! study has this one home.
 //!
 //! Depends on `job` and `integrator` (rendering), `scene`, `application` (the registry), `image` and
