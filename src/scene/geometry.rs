@@ -8,7 +8,8 @@ use crate::scene::accel::{Accel, Hit, OccluderCache, OccluderHint, PrimOrigin, P
 use crate::scene::mesh::TriangleMesh;
 use crate::scene::ray::{Ray, gamma, offset_ray_origin};
 use crate::scene::shapes::curve::CurveHit;
-use crate::scene::shapes::quadric::{QuadricHit, transform_normal, transform_point_with_error};
+use crate::scene::shapes::quadric::QuadricHit;
+use crate::scene::transform::{transform_normal, transform_point_with_error};
 
 /// A shape that can carry an area light.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

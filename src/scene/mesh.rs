@@ -5,8 +5,8 @@ use crate::error::{Error, Result, SourceLoc, Warnings};
 use crate::parse::ParamList;
 use crate::scene::accel::MAX_COORD;
 use crate::scene::shapes::mesh_data::{MeshData, triangle_indices};
-use crate::scene::shapes::quadric::transform_normal;
 use crate::scene::transform::Transform;
+use crate::scene::transform::transform_normal;
 
 /// A triangle mesh in world space (or object-definition space).
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -1,7 +1,10 @@
 //! STAGE 2 (scene): the transforms of the scene description — pbrt-v3's Translate, Scale, Rotate, LookAt
-//! and Transform matrices, composed in f64 and checked (finite, invertible) before anything uses them.
+//! and Transform matrices, composed in f64 and checked (finite, invertible) before anything uses them; and
+//! applying an f32 transform to a point with its error bound, a normal, or a box, as pbrt-v3 does.
 
 use glam::{Affine3A, DMat4, DVec3, DVec4, Mat3A, Vec3A};
+
+use crate::scene::ray::gamma;
 
 /// A 4×4 transform with its inverse, in f64 (the builder composes many; f32 is used only for rendering).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -135,6 +138,39 @@ impl Transform {
     pub fn is_identity(&self) -> bool {
         self.m == DMat4::IDENTITY
     }
+}
+
+/// Transforms a point and its absolute error bound, adding the rounding error of the transform itself
+/// (pbrt-v3 `Transform::operator()(Point3, Vector3, Vector3*)`).
+pub fn transform_point_with_error(m: &Affine3A, p: Vec3A, err: Vec3A) -> (Vec3A, Vec3A) {
+    let a = m.matrix3;
+    let abs_cols = [a.x_axis.abs(), a.y_axis.abs(), a.z_axis.abs()];
+    let g3 = gamma(3);
+    let from_err = abs_cols[0] * err.x + abs_cols[1] * err.y + abs_cols[2] * err.z;
+    let from_p = (a.x_axis * p.x).abs() + (a.y_axis * p.y).abs() + (a.z_axis * p.z).abs() + m.translation.abs();
+    (m.transform_point3a(p), from_err * (g3 + 1.0) + from_p * g3)
+}
+
+/// Transforms a normal by the inverse transpose and normalises it.
+pub fn transform_normal(m: &Affine3A, n: Vec3A) -> Vec3A {
+    (m.matrix3.inverse().transpose() * n).normalize()
+}
+
+/// The axis-aligned box of the 8 transformed corners of (lo, hi).
+pub fn transform_bounds(m: &Affine3A, lo: Vec3A, hi: Vec3A) -> (Vec3A, Vec3A) {
+    let mut bmin = Vec3A::splat(f32::INFINITY);
+    let mut bmax = Vec3A::splat(f32::NEG_INFINITY);
+    for i in 0..8 {
+        let c = Vec3A::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        );
+        let w = m.transform_point3a(c);
+        bmin = bmin.min(w);
+        bmax = bmax.max(w);
+    }
+    (bmin, bmax)
 }
 
 #[cfg(test)]

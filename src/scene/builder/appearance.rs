@@ -10,8 +10,8 @@ use crate::scene::geometry::ObjectDef;
 use crate::scene::light::{self, Light};
 use crate::scene::material::{Material, MaterialKind};
 use crate::scene::props::{Capture, Prop, Props};
-use crate::scene::shapes::quadric::transform_bounds;
 use crate::scene::texture::{self, Texture, TextureValue};
+use crate::scene::transform::transform_bounds;
 
 use super::state::Block;
 use super::{ObjectRecord, SceneBuilder};

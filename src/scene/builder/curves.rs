@@ -77,28 +77,7 @@ pub(super) fn curve_params(n: &Named, warnings: &mut Warnings) -> Result<CurveSp
         return Err(Error::at(&at("P"), "curve \"P\" must be finite"));
     }
     let cp: Vec<Vec3A> = points.iter().map(|&[x, y, z]| Vec3A::new(x as f32, y as f32, z as f32)).collect();
-    let ncp = cp.len();
-    let n_pieces = if bezier {
-        // The first piece has degree + 1 points; each further one reuses the last and adds `degree`.
-        if ncp < degree + 1 || !(ncp - 1 - degree).is_multiple_of(degree) {
-            return Err(Error::at(
-                &at("P"),
-                format!(
-                    "curve: {ncp} control points; a degree {degree} Bézier curve needs {} + n·{degree} (n ≥ 0)",
-                    degree + 1
-                ),
-            ));
-        }
-        (ncp - 1) / degree
-    } else {
-        if ncp < degree + 1 {
-            return Err(Error::at(
-                &at("P"),
-                format!("curve: {ncp} control points; a degree {degree} B-spline needs at least {}", degree + 1),
-            ));
-        }
-        ncp - degree
-    };
+    let n_pieces = piece_count(cp.len(), degree, bezier).map_err(|why| Error::at(&at("P"), why))?;
 
     let kind = match p.string_or("type", "flat")? {
         "flat" => CurveType::Flat,
@@ -112,7 +91,49 @@ pub(super) fn curve_params(n: &Named, warnings: &mut Warnings) -> Result<CurveSp
         }
     };
 
-    let normals = match (p.normals("N")?, kind) {
+    let normals = ribbon_normals(n, kind, n_pieces, warnings)?;
+
+    let split_depth = split_depth(n, warnings)?;
+
+    let mut pieces = Vec::with_capacity(n_pieces);
+    for seg in 0..n_pieces {
+        let c = piece_bezier(&cp, seg, degree, bezier);
+        let t = |i: usize| i as f32 / n_pieces as f32;
+        let width =
+            [(1.0 - t(seg)) * w0 as f32 + t(seg) * w1 as f32, (1.0 - t(seg + 1)) * w0 as f32 + t(seg + 1) * w1 as f32];
+        pieces.push(CurvePiece { cp: c, width, normals: normals.as_ref().map(|ns| [ns[seg], ns[seg + 1]]) });
+    }
+    Ok(CurveSpec { pieces, kind, split_depth })
+}
+
+/// How many pieces `cp_count` control points make for a curve of `degree`, or why they make none.
+fn piece_count(cp_count: usize, degree: usize, bezier: bool) -> std::result::Result<usize, String> {
+    let ncp = cp_count;
+    Ok(if bezier {
+        // The first piece has degree + 1 points; each further one reuses the last and adds `degree`.
+        if ncp < degree + 1 || !(ncp - 1 - degree).is_multiple_of(degree) {
+            return Err(format!(
+                "curve: {ncp} control points; a degree {degree} Bézier curve needs {} + n·{degree} (n ≥ 0)",
+                degree + 1
+            ));
+        }
+        (ncp - 1) / degree
+    } else {
+        if ncp < degree + 1 {
+            return Err(format!(
+                "curve: {ncp} control points; a degree {degree} B-spline needs at least {}",
+                degree + 1
+            ));
+        }
+        ncp - degree
+    })
+}
+
+/// The piece-end normals of a ribbon (`None` for the other types, which ignore them with a warning).
+fn ribbon_normals(n: &Named, kind: CurveType, n_pieces: usize, warnings: &mut Warnings) -> Result<Option<Vec<Vec3A>>> {
+    let p = &n.params;
+    let at = |name: &str| p.loc_of(name).unwrap_or(&n.name_loc).clone();
+    Ok(match (p.normals("N")?, kind) {
         (Some(_), CurveType::Flat | CurveType::Cylinder) => {
             warnings.at(&at("N"), "curve normals \"N\" are only used with \"ribbon\" curves (as in pbrt-v3); ignored");
             None
@@ -134,8 +155,40 @@ pub(super) fn curve_params(n: &Named, warnings: &mut Warnings) -> Result<CurveSp
             return Err(Error::at(&n.name_loc, "curve: \"ribbon\" curves need \"normal N\" at the piece ends"));
         }
         (None, _) => None,
-    };
+    })
+}
 
+/// The four Bézier control points of piece `seg` of a curve of `degree` (2 is elevated to a cubic); a
+/// uniform B-spline's piece is converted to Bézier form by blossoming (pbrt-v3's formulas).
+fn piece_bezier(cp: &[Vec3A], seg: usize, degree: usize, bezier: bool) -> [Vec3A; 4] {
+    if bezier {
+        let b = &cp[seg * degree..];
+        if degree == 2 {
+            // Degree elevation to a cubic.
+            [b[0], lerp(2.0 / 3.0, b[0], b[1]), lerp(1.0 / 3.0, b[1], b[2]), b[2]]
+        } else {
+            [b[0], b[1], b[2], b[3]]
+        }
+    } else {
+        // Uniform B-spline to Bézier by blossoming (pbrt-v3's formulas).
+        let b = &cp[seg..];
+        if degree == 2 {
+            let (p11, p22) = (lerp(0.5, b[0], b[1]), lerp(0.5, b[1], b[2]));
+            [p11, lerp(2.0 / 3.0, p11, b[1]), lerp(1.0 / 3.0, b[1], p22), p22]
+        } else {
+            let p122 = lerp(2.0 / 3.0, b[0], b[1]);
+            let p223 = lerp(1.0 / 3.0, b[1], b[2]);
+            let p233 = lerp(2.0 / 3.0, b[1], b[2]);
+            let p334 = lerp(1.0 / 3.0, b[2], b[3]);
+            [lerp(0.5, p122, p223), p223, p233, lerp(0.5, p233, p334)]
+        }
+    }
+}
+
+/// The curve's `splitdepth` (int or float, default 3), capped at [`MAX_SPLIT_DEPTH`] with a warning.
+fn split_depth(n: &Named, warnings: &mut Warnings) -> Result<u32> {
+    let p = &n.params;
+    let at = |name: &str| p.loc_of(name).unwrap_or(&n.name_loc).clone();
     let split = match p.get("splitdepth").map(|q| q.ty) {
         Some(ParamType::Float) => p.float("splitdepth")?.map(|f| f.trunc()),
         _ => p.int("splitdepth")?.map(|i| i as f64),
@@ -144,7 +197,7 @@ pub(super) fn curve_params(n: &Named, warnings: &mut Warnings) -> Result<CurveSp
     if split.is_nan() || split < 0.0 {
         return Err(Error::at(&at("splitdepth"), format!("curve \"splitdepth\" must not be negative, got {split}")));
     }
-    let split_depth = if split > MAX_SPLIT_DEPTH as f64 {
+    Ok(if split > MAX_SPLIT_DEPTH as f64 {
         warnings.at(
             &at("splitdepth"),
             format!("curve \"splitdepth\" {split} would make 2^{split} segments per piece; using {MAX_SPLIT_DEPTH}"),
@@ -152,36 +205,5 @@ pub(super) fn curve_params(n: &Named, warnings: &mut Warnings) -> Result<CurveSp
         MAX_SPLIT_DEPTH as u32
     } else {
         split as u32
-    };
-
-    let mut pieces = Vec::with_capacity(n_pieces);
-    for seg in 0..n_pieces {
-        let c = if bezier {
-            let b = &cp[seg * degree..];
-            if degree == 2 {
-                // Degree elevation to a cubic.
-                [b[0], lerp(2.0 / 3.0, b[0], b[1]), lerp(1.0 / 3.0, b[1], b[2]), b[2]]
-            } else {
-                [b[0], b[1], b[2], b[3]]
-            }
-        } else {
-            // Uniform B-spline to Bézier by blossoming (pbrt-v3's formulas).
-            let b = &cp[seg..];
-            if degree == 2 {
-                let (p11, p22) = (lerp(0.5, b[0], b[1]), lerp(0.5, b[1], b[2]));
-                [p11, lerp(2.0 / 3.0, p11, b[1]), lerp(1.0 / 3.0, b[1], p22), p22]
-            } else {
-                let p122 = lerp(2.0 / 3.0, b[0], b[1]);
-                let p223 = lerp(1.0 / 3.0, b[1], b[2]);
-                let p233 = lerp(2.0 / 3.0, b[1], b[2]);
-                let p334 = lerp(1.0 / 3.0, b[2], b[3]);
-                [lerp(0.5, p122, p223), p223, p233, lerp(0.5, p233, p334)]
-            }
-        };
-        let t = |i: usize| i as f32 / n_pieces as f32;
-        let width =
-            [(1.0 - t(seg)) * w0 as f32 + t(seg) * w1 as f32, (1.0 - t(seg + 1)) * w0 as f32 + t(seg + 1) * w1 as f32];
-        pieces.push(CurvePiece { cp: c, width, normals: normals.as_ref().map(|ns| [ns[seg], ns[seg + 1]]) });
-    }
-    Ok(CurveSpec { pieces, kind, split_depth })
+    })
 }

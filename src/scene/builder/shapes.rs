@@ -249,35 +249,37 @@ fn quadric_params(n: &Named) -> Result<QuadricKind> {
             }
             QuadricKind::Paraboloid { radius: r, z_min, z_max, phi_max }
         }
-        "hyperboloid" => {
-            let point = |name: &str, default: [f64; 3]| -> Result<[f64; 3]> {
-                let v = p.point3(name)?.unwrap_or(default);
-                if v.iter().all(|c| c.is_finite()) {
-                    Ok(v)
-                } else {
-                    Err(Error::at(
-                        p.loc_of(name).unwrap_or(&n.name_loc),
-                        format!("hyperboloid \"{name}\" must be finite"),
-                    ))
-                }
-            };
-            let (p1, p2) = (point("p1", [0.0; 3])?, point("p2", [1.0; 3])?);
-            QuadricKind::hyperboloid(p1, p2, phi_max).ok_or_else(|| {
-                Error::at(
-                    p.loc_of("p2").or(p.loc_of("p1")).unwrap_or(&n.name_loc),
-                    format!(
-                        "hyperboloid: the line from p1 {p1:?} to p2 {p2:?} sweeps no surface pbrt-v3 can intersect \
-                         (p1 = p2, p1.z = p2.z, or a line through the z axis such as the defaults; pbrt-v3 never \
-                         finishes building it)"
-                    ),
-                )
-            })?
-        }
+        "hyperboloid" => hyperboloid_params(n, phi_max)?,
         _ => {
             let r = positive("radius", p.float_or("radius", 1.0)?)?;
             let z0 = finite("zmin", p.float_or("zmin", -1.0)?)?;
             let z1 = finite("zmax", p.float_or("zmax", 1.0)?)?;
             QuadricKind::Cylinder { radius: r, z_min: z0.min(z1), z_max: z0.max(z1), phi_max }
         }
+    })
+}
+
+/// A hyperboloid from the line p1–p2 swept around the z axis (refused where pbrt-v3 would never finish
+/// building it).
+fn hyperboloid_params(n: &Named, phi_max: f64) -> Result<QuadricKind> {
+    let p = &n.params;
+    let point = |name: &str, default: [f64; 3]| -> Result<[f64; 3]> {
+        let v = p.point3(name)?.unwrap_or(default);
+        if v.iter().all(|c| c.is_finite()) {
+            Ok(v)
+        } else {
+            Err(Error::at(p.loc_of(name).unwrap_or(&n.name_loc), format!("hyperboloid \"{name}\" must be finite")))
+        }
+    };
+    let (p1, p2) = (point("p1", [0.0; 3])?, point("p2", [1.0; 3])?);
+    QuadricKind::hyperboloid(p1, p2, phi_max).ok_or_else(|| {
+        Error::at(
+            p.loc_of("p2").or(p.loc_of("p1")).unwrap_or(&n.name_loc),
+            format!(
+                "hyperboloid: the line from p1 {p1:?} to p2 {p2:?} sweeps no surface pbrt-v3 can intersect \
+                 (p1 = p2, p1.z = p2.z, or a line through the z axis such as the defaults; pbrt-v3 never \
+                 finishes building it)"
+            ),
+        )
     })
 }

@@ -18,7 +18,7 @@
 use glam::{Affine3A, Vec3A};
 
 use crate::scene::ray::Ray;
-use crate::scene::shapes::quadric::{transform_bounds, transform_normal, transform_point_with_error};
+use crate::scene::transform::{transform_bounds, transform_normal, transform_point_with_error};
 
 /// Deepest recursive subdivision of a segment (pbrt-v3 clamps its `maxDepth` to 10).
 const MAX_DEPTH: i32 = 10;

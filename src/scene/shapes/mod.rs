@@ -3,6 +3,7 @@
 //! [`quadric`] and [`curve`] intersect rays with triangles, analytic shapes and curves.
 
 pub mod curve;
+pub(crate) mod efloat;
 pub mod heightfield;
 pub mod loopsubdiv;
 pub mod mesh_data;

@@ -14,6 +14,8 @@
 use glam::{Affine3A, DVec3, Mat3A, Vec3A};
 
 use crate::scene::ray::{Ray, gamma};
+use crate::scene::shapes::efloat::{EFloat, efloat_quadratic};
+use crate::scene::transform::{transform_bounds, transform_point_with_error};
 
 /// The shape in its own object space.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -119,98 +121,6 @@ pub struct QuadricHit {
     /// Object-space error bound of `p` when the intersection computed one (cone, paraboloid, hyperboloid:
     /// pbrt-v3's interval bound of o + t·d); zero for the shapes whose bound comes from `p` alone.
     pub p_error: Vec3A,
-}
-
-/// pbrt-v3's `EFloat`: an f32 value with a conservative interval [low, high] around the exact result.
-#[derive(Clone, Copy, Debug)]
-struct EFloat {
-    v: f32,
-    low: f32,
-    high: f32,
-}
-
-impl EFloat {
-    fn new(v: f32, err: f32) -> Self {
-        if err == 0.0 {
-            EFloat { v, low: v, high: v }
-        } else {
-            EFloat { v, low: (v - err).next_down(), high: (v + err).next_up() }
-        }
-    }
-
-    fn exact(v: f32) -> Self {
-        EFloat::new(v, 0.0)
-    }
-
-    fn abs_error(self) -> f32 {
-        (self.high - self.v).abs().max((self.v - self.low).abs()).next_up()
-    }
-}
-
-impl std::ops::Add for EFloat {
-    type Output = EFloat;
-    fn add(self, e: EFloat) -> EFloat {
-        EFloat { v: self.v + e.v, low: (self.low + e.low).next_down(), high: (self.high + e.high).next_up() }
-    }
-}
-
-impl std::ops::Sub for EFloat {
-    type Output = EFloat;
-    fn sub(self, e: EFloat) -> EFloat {
-        EFloat { v: self.v - e.v, low: (self.low - e.high).next_down(), high: (self.high - e.low).next_up() }
-    }
-}
-
-impl std::ops::Mul for EFloat {
-    type Output = EFloat;
-    fn mul(self, e: EFloat) -> EFloat {
-        let p = [self.low * e.low, self.high * e.low, self.low * e.high, self.high * e.high];
-        EFloat {
-            v: self.v * e.v,
-            low: p[0].min(p[1]).min(p[2].min(p[3])).next_down(),
-            high: p[0].max(p[1]).max(p[2].max(p[3])).next_up(),
-        }
-    }
-}
-
-impl std::ops::Div for EFloat {
-    type Output = EFloat;
-    fn div(self, e: EFloat) -> EFloat {
-        if e.low < 0.0 && e.high > 0.0 {
-            return EFloat { v: self.v / e.v, low: f32::NEG_INFINITY, high: f32::INFINITY };
-        }
-        let q = [self.low / e.low, self.high / e.low, self.low / e.high, self.high / e.high];
-        EFloat {
-            v: self.v / e.v,
-            low: q[0].min(q[1]).min(q[2].min(q[3])).next_down(),
-            high: q[0].max(q[1]).max(q[2].max(q[3])).next_up(),
-        }
-    }
-}
-
-impl std::ops::Neg for EFloat {
-    type Output = EFloat;
-    fn neg(self) -> EFloat {
-        EFloat { v: -self.v, low: -self.high, high: -self.low }
-    }
-}
-
-/// pbrt-v3's `Quadratic` on intervals (the discriminant in f64). A zero `a` (a ray along a paraboloid's
-/// axis) gives the linear root and an infinite one.
-fn efloat_quadratic(a: EFloat, b: EFloat, c: EFloat) -> Option<(EFloat, EFloat)> {
-    if a.v == 0.0 {
-        return (b.v != 0.0).then(|| (-c / b, EFloat::exact(f32::INFINITY)));
-    }
-    let discrim = b.v as f64 * b.v as f64 - 4.0 * a.v as f64 * c.v as f64;
-    if discrim < 0.0 {
-        return None;
-    }
-    let root = discrim.sqrt();
-    let root = EFloat::new(root as f32, (f32::EPSILON as f64 * 0.5 * root) as f32);
-    let half = EFloat::exact(-0.5);
-    let q = if b.v < 0.0 { half * (b - root) } else { half * (b + root) };
-    let (t0, t1) = (q / a, c / q);
-    Some(if t0.v > t1.v { (t1, t0) } else { (t0, t1) })
 }
 
 /// Surface data of a quadric hit, in world space.
@@ -478,6 +388,55 @@ impl QuadricKind {
             }
         }
     }
+
+    /// The interval coefficients (a, b, c) of a·t² + b·t + c = 0 for the object-space ray o + t·d, as pbrt-v3
+    /// computes them for the shapes it solves in interval arithmetic (cone, paraboloid, hyperboloid; `None`
+    /// for the others).
+    fn efloat_coefficients(&self, o: [EFloat; 3], d: [EFloat; 3]) -> Option<(EFloat, EFloat, EFloat)> {
+        let ([ox, oy, oz], [dx, dy, dz]) = (o, d);
+        let two = EFloat::exact(2.0);
+        Some(match *self {
+            QuadricKind::Cone { height, radius, .. } => {
+                let h = EFloat::exact(height as f32);
+                let k = EFloat::exact(radius as f32) / h;
+                let k = k * k;
+                (
+                    dx * dx + dy * dy - k * dz * dz,
+                    two * (dx * ox + dy * oy - k * dz * (oz - h)),
+                    ox * ox + oy * oy - k * (oz - h) * (oz - h),
+                )
+            }
+            QuadricKind::Paraboloid { radius, z_max, .. } => {
+                let r = EFloat::exact(radius as f32);
+                let k = EFloat::exact(z_max as f32) / (r * r);
+                (k * (dx * dx + dy * dy), two * k * (dx * ox + dy * oy) - dz, k * (ox * ox + oy * oy) - oz)
+            }
+            QuadricKind::Hyperboloid { ah, ch, .. } => {
+                let (ah, ch) = (EFloat::exact(ah as f32), EFloat::exact(ch as f32));
+                (
+                    ah * dx * dx + ah * dy * dy - ch * dz * dz,
+                    two * (ah * dx * ox + ah * dy * oy - ch * dz * oz),
+                    ah * ox * ox + ah * oy * oy - ch * oz * oz - EFloat::exact(1.0),
+                )
+            }
+            _ => return None,
+        })
+    }
+
+    /// Whether pbrt-v3 keeps the object-space hit `p` of a cone, paraboloid or hyperboloid: inside its z range
+    /// and φ ≤ φmax (false for the other shapes).
+    fn kept_as_pbrt_v3(&self, p: DVec3) -> bool {
+        match *self {
+            QuadricKind::Cone { height, phi_max, .. } => p.z >= 0.0 && p.z <= height && phi_of(p) <= phi_max,
+            QuadricKind::Paraboloid { z_min, z_max, phi_max, .. } => {
+                p.z >= z_min && p.z <= z_max && phi_of(p) <= phi_max
+            }
+            QuadricKind::Hyperboloid { p1, p2, z_min, z_max, phi_max, .. } => {
+                p.z >= z_min && p.z <= z_max && hyperboloid_phi(p, p1, p2) <= phi_max
+            }
+            _ => false,
+        }
+    }
 }
 
 impl Quadric {
@@ -515,51 +474,13 @@ impl Quadric {
         let o = if len2 > 0.0 { o + d * (d.abs().dot(o_err) / len2) } else { o };
         let (ox, oy, oz) = (EFloat::new(o.x, o_err.x), EFloat::new(o.y, o_err.y), EFloat::new(o.z, o_err.z));
         let (dx, dy, dz) = (EFloat::new(d.x, d_err.x), EFloat::new(d.y, d_err.y), EFloat::new(d.z, d_err.z));
-        let two = EFloat::exact(2.0);
-        let (a, b, c) = match self.kind {
-            QuadricKind::Cone { height, radius, .. } => {
-                let h = EFloat::exact(height as f32);
-                let k = EFloat::exact(radius as f32) / h;
-                let k = k * k;
-                (
-                    dx * dx + dy * dy - k * dz * dz,
-                    two * (dx * ox + dy * oy - k * dz * (oz - h)),
-                    ox * ox + oy * oy - k * (oz - h) * (oz - h),
-                )
-            }
-            QuadricKind::Paraboloid { radius, z_max, .. } => {
-                let r = EFloat::exact(radius as f32);
-                let k = EFloat::exact(z_max as f32) / (r * r);
-                (k * (dx * dx + dy * dy), two * k * (dx * ox + dy * oy) - dz, k * (ox * ox + oy * oy) - oz)
-            }
-            QuadricKind::Hyperboloid { ah, ch, .. } => {
-                let (ah, ch) = (EFloat::exact(ah as f32), EFloat::exact(ch as f32));
-                (
-                    ah * dx * dx + ah * dy * dy - ch * dz * dz,
-                    two * (ah * dx * ox + ah * dy * oy - ch * dz * oz),
-                    ah * ox * ox + ah * oy * oy - ch * oz * oz - EFloat::exact(1.0),
-                )
-            }
-            _ => return None,
-        };
+        let (a, b, c) = self.kind.efloat_coefficients([ox, oy, oz], [dx, dy, dz])?;
         let (t0, t1) = efloat_quadratic(a, b, c)?;
         let t_max = ray.t_max;
         if t0.high > t_max || t1.low <= 0.0 {
             return None;
         }
-        let keep = |p: Vec3A| {
-            let p = p.as_dvec3();
-            match self.kind {
-                QuadricKind::Cone { height, phi_max, .. } => p.z >= 0.0 && p.z <= height && phi_of(p) <= phi_max,
-                QuadricKind::Paraboloid { z_min, z_max, phi_max, .. } => {
-                    p.z >= z_min && p.z <= z_max && phi_of(p) <= phi_max
-                }
-                QuadricKind::Hyperboloid { p1, p2, z_min, z_max, phi_max, .. } => {
-                    p.z >= z_min && p.z <= z_max && hyperboloid_phi(p, p1, p2) <= phi_max
-                }
-                _ => false,
-            }
-        };
+        let keep = |p: Vec3A| self.kind.kept_as_pbrt_v3(p.as_dvec3());
         let mut t = t0;
         if t.low <= 0.0 {
             t = t1;
@@ -636,39 +557,6 @@ impl Quadric {
         let (lo, hi) = self.kind.bounds();
         transform_bounds(&self.world_from_object, lo.as_vec3().into(), hi.as_vec3().into())
     }
-}
-
-/// Transforms a point and its absolute error bound, adding the rounding error of the transform itself
-/// (pbrt-v3 `Transform::operator()(Point3, Vector3, Vector3*)`).
-pub fn transform_point_with_error(m: &Affine3A, p: Vec3A, err: Vec3A) -> (Vec3A, Vec3A) {
-    let a = m.matrix3;
-    let abs_cols = [a.x_axis.abs(), a.y_axis.abs(), a.z_axis.abs()];
-    let g3 = gamma(3);
-    let from_err = abs_cols[0] * err.x + abs_cols[1] * err.y + abs_cols[2] * err.z;
-    let from_p = (a.x_axis * p.x).abs() + (a.y_axis * p.y).abs() + (a.z_axis * p.z).abs() + m.translation.abs();
-    (m.transform_point3a(p), from_err * (g3 + 1.0) + from_p * g3)
-}
-
-/// Transforms a normal by the inverse transpose and normalises it.
-pub fn transform_normal(m: &Affine3A, n: Vec3A) -> Vec3A {
-    (m.matrix3.inverse().transpose() * n).normalize()
-}
-
-/// The axis-aligned box of the 8 transformed corners of (lo, hi).
-pub fn transform_bounds(m: &Affine3A, lo: Vec3A, hi: Vec3A) -> (Vec3A, Vec3A) {
-    let mut bmin = Vec3A::splat(f32::INFINITY);
-    let mut bmax = Vec3A::splat(f32::NEG_INFINITY);
-    for i in 0..8 {
-        let c = Vec3A::new(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        );
-        let w = m.transform_point3a(c);
-        bmin = bmin.min(w);
-        bmax = bmax.max(w);
-    }
-    (bmin, bmax)
 }
 
 #[cfg(test)]

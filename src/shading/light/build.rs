@@ -132,27 +132,7 @@ impl<'a> Lights<'a> {
                 let p = xf.translation + point3(props, "from", [0.0; 3]);
                 Kind::Point(PointLight { p, i })
             }
-            "spot" => {
-                let i = colour(props, "I", &what, loc)?;
-                let cone = props.float("coneangle", 30.0);
-                let delta = props.float("conedeltaangle", 5.0);
-                if !cone.is_finite() || !delta.is_finite() {
-                    return Err(Error::at(loc, format!("{what}: the cone angles must be finite")));
-                }
-                let (from, to) = (point3(props, "from", [0.0; 3]), point3(props, "to", [0.0, 0.0, 1.0]));
-                let axis = (to - from).normalize_or_zero();
-                if axis == Vec3A::ZERO {
-                    return Err(Error::at(loc, format!("{what}: \"from\" and \"to\" are the same point")));
-                }
-                Kind::Spot(SpotLight {
-                    p: xf.transform_point3a(from),
-                    i,
-                    light_from_world: m.inverse(),
-                    axis,
-                    cos_total: cone.to_radians().cos(),
-                    cos_falloff_start: (cone - delta).to_radians().cos(),
-                })
-            }
+            "spot" => Kind::Spot(spot_light(light, &what)?),
             "distant" => {
                 let l = colour(props, "L", &what, loc)?;
                 let (from, to) = (point3(props, "from", [0.0; 3]), point3(props, "to", [0.0, 0.0, 1.0]));
@@ -163,25 +143,7 @@ impl<'a> Lights<'a> {
                 Kind::Distant(DistantLight { w, l, world_radius })
             }
             "infinite" | "exinfinite" => {
-                let l = colour(props, "L", &what, loc)?;
-                let map = match props.str("mapname") {
-                    Some(path) => read_envmap(path, l).unwrap_or_else(|why| {
-                        warnings.at(
-                            loc,
-                            format!("{what}: environment map unusable ({why}); using the constant L as pbrt-v3 does"),
-                        );
-                        EnvMap::constant(l)
-                    }),
-                    None => EnvMap::constant(l),
-                };
-                if m.determinant() == 0.0 || !m.is_finite() {
-                    return Err(Error::at(loc, format!("{what}: the transform cannot be inverted")));
-                }
-                let light = InfiniteLight::new(map, m, world_radius);
-                if is_black(light.map().mean()) {
-                    warnings.at(loc, format!("{what} emits nothing; skipped"));
-                    return Ok(());
-                }
+                let Some(light) = infinite_light(light, &what, world_radius, warnings)? else { return Ok(()) };
                 self.infinite.push(light);
                 Kind::Infinite(self.infinite.len() as u32 - 1)
             }
@@ -280,4 +242,58 @@ impl<'a> Lights<'a> {
         }
         Ok(())
     }
+}
+
+/// A `spot` light: position, cone and axis from "from" and "to" in the light's space.
+fn spot_light(light: &Light, what: &str) -> Result<SpotLight> {
+    let (loc, props, xf) = (&light.loc, &light.props, light.world_from_light);
+    let m: Mat3A = xf.matrix3;
+    let i = colour(props, "I", what, loc)?;
+    let cone = props.float("coneangle", 30.0);
+    let delta = props.float("conedeltaangle", 5.0);
+    if !cone.is_finite() || !delta.is_finite() {
+        return Err(Error::at(loc, format!("{what}: the cone angles must be finite")));
+    }
+    let (from, to) = (point3(props, "from", [0.0; 3]), point3(props, "to", [0.0, 0.0, 1.0]));
+    let axis = (to - from).normalize_or_zero();
+    if axis == Vec3A::ZERO {
+        return Err(Error::at(loc, format!("{what}: \"from\" and \"to\" are the same point")));
+    }
+    Ok(SpotLight {
+        p: xf.transform_point3a(from),
+        i,
+        light_from_world: m.inverse(),
+        axis,
+        cos_total: cone.to_radians().cos(),
+        cos_falloff_start: (cone - delta).to_radians().cos(),
+    })
+}
+
+/// An `infinite` light with its environment map (the constant L, with a warning, when the map cannot be
+/// read, as pbrt-v3 does); `None`, with a warning, when it emits nothing.
+fn infinite_light(
+    light: &Light,
+    what: &str,
+    world_radius: f32,
+    warnings: &mut Warnings,
+) -> Result<Option<InfiniteLight>> {
+    let (loc, props) = (&light.loc, &light.props);
+    let m: Mat3A = light.world_from_light.matrix3;
+    let l = colour(props, "L", what, loc)?;
+    let map = match props.str("mapname") {
+        Some(path) => read_envmap(path, l).unwrap_or_else(|why| {
+            warnings.at(loc, format!("{what}: environment map unusable ({why}); using the constant L as pbrt-v3 does"));
+            EnvMap::constant(l)
+        }),
+        None => EnvMap::constant(l),
+    };
+    if m.determinant() == 0.0 || !m.is_finite() {
+        return Err(Error::at(loc, format!("{what}: the transform cannot be inverted")));
+    }
+    let light = InfiniteLight::new(map, m, world_radius);
+    if is_black(light.map().mean()) {
+        warnings.at(loc, format!("{what} emits nothing; skipped"));
+        return Ok(None);
+    }
+    Ok(Some(light))
 }

@@ -116,100 +116,113 @@ pub fn scatter(materials: &[Compiled], id: u32, hit: &Hit, depth: u32, b: &mut B
             }
         }
         Compiled::Glass { kr, kt, eta, urough, vrough, remap } => glass(hit, kr, kt, eta, urough, vrough, remap, b),
-        Compiled::Uber { kd, ks, kr, kt, urough, vrough, eta, opacity, remap } => {
-            let e = safe_ior(hit.float(&eta));
-            let op = hit.color(&opacity);
-            let t = clamp_spectrum(Spectrum::ONE - op);
-            if !is_black(t) {
-                hit.reset(b, 1.0);
-                b.add(Bxdf::SpecularTransmission(SpecularTransmission { t, eta_a: 1.0, eta_b: 1.0 }));
-            } else {
-                hit.reset(b, e);
-            }
-            let kd = op * hit.color(&kd);
-            if !is_black(kd) {
-                b.add(Bxdf::Lambertian(LambertianReflection { r: kd }));
-            }
-            let ks = op * hit.color(&ks);
-            if !is_black(ks) {
-                let ru = safe_roughness(hit.float(&urough));
-                let rv = vrough.map_or(ru, |v| safe_roughness(hit.float(&v)));
-                let (au, av) = if remap { (roughness_to_alpha(ru), roughness_to_alpha(rv)) } else { (ru, rv) };
-                b.add(Bxdf::MicrofacetReflection(MicrofacetReflection {
-                    r: ks,
-                    distribution: TrowbridgeReitz::new(au, av),
-                    fresnel: Fresnel::Dielectric { eta_i: 1.0, eta_t: e },
-                }));
-            }
-            let kr = op * hit.color(&kr);
-            if !is_black(kr) {
-                b.add(Bxdf::SpecularReflection(SpecularReflection {
-                    r: kr,
-                    fresnel: Fresnel::Dielectric { eta_i: 1.0, eta_t: e },
-                }));
-            }
-            let kt = op * hit.color(&kt);
-            if !is_black(kt) {
-                b.add(Bxdf::SpecularTransmission(SpecularTransmission { t: kt, eta_a: 1.0, eta_b: e }));
-            }
-        }
-        Compiled::Mix { amount, materials: [m1, m2] } => {
-            // A part without a BSDF (`none`) adds no lobes (pbrt-v3 would dereference a null BSDF); lobes past
-            // the eighth are dropped (pbrt-v3 would abort; `Materials::build` warns).
-            let s1 = hit.color(&amount);
-            let s2 = clamp_spectrum(Spectrum::ONE - s1);
-            let deeper = depth < MAX_MIX_DEPTH;
-            if !(deeper && scatter(materials, m1, hit, depth + 1, b)) {
-                hit.reset(b, 1.0);
-            }
-            b.scale_all(s1);
-            // The second part needs storage of its own; mixes are rare enough for a local one.
-            let mut b2 = Bsdf::new(hit.si.ng, hit.si.ns, hit.si.dpdu, 1.0);
-            if deeper && scatter(materials, m2, hit, depth + 1, &mut b2) {
-                for (lobe, s) in b2.lobes() {
-                    b.add_scaled(*lobe, s * s2);
-                }
-            }
-        }
-        Compiled::Translucent { kd, ks, reflect, transmit, roughness, remap } => {
-            let eta = 1.5;
-            hit.reset(b, eta);
-            let (r, t) = (hit.color(&reflect), hit.color(&transmit));
-            if is_black(r) && is_black(t) {
-                return true;
-            }
-            let kd = hit.color(&kd);
-            if !is_black(kd) {
-                if !is_black(r) {
-                    b.add(Bxdf::Lambertian(LambertianReflection { r: r * kd }));
-                }
-                if !is_black(t) {
-                    b.add(Bxdf::LambertianTransmission(LambertianTransmission { t: t * kd }));
-                }
-            }
-            let ks = hit.color(&ks);
-            if !is_black(ks) {
-                let a = hit.alpha(&roughness, remap);
-                let distribution = TrowbridgeReitz::new(a, a);
-                if !is_black(r) {
-                    b.add(Bxdf::MicrofacetReflection(MicrofacetReflection {
-                        r: r * ks,
-                        distribution,
-                        fresnel: Fresnel::Dielectric { eta_i: 1.0, eta_t: eta },
-                    }));
-                }
-                if !is_black(t) {
-                    b.add(Bxdf::MicrofacetTransmission(MicrofacetTransmission {
-                        t: t * ks,
-                        distribution,
-                        eta_a: 1.0,
-                        eta_b: eta,
-                    }));
-                }
-            }
-        }
+        Compiled::Uber { .. } => uber(hit, m, b),
+        Compiled::Mix { .. } => mix(materials, m, hit, depth, b),
+        Compiled::Translucent { .. } => translucent(hit, m, b),
     }
     true
+}
+
+/// Uber: pbrt-v3's `UberMaterial` — an opacity's specular pass-through, diffuse, glossy, specular reflection
+/// and transmission lobes.
+fn uber(hit: &Hit, m: Compiled, b: &mut Bsdf) {
+    let Compiled::Uber { kd, ks, kr, kt, urough, vrough, eta, opacity, remap } = m else { return };
+    let e = safe_ior(hit.float(&eta));
+    let op = hit.color(&opacity);
+    let t = clamp_spectrum(Spectrum::ONE - op);
+    if !is_black(t) {
+        hit.reset(b, 1.0);
+        b.add(Bxdf::SpecularTransmission(SpecularTransmission { t, eta_a: 1.0, eta_b: 1.0 }));
+    } else {
+        hit.reset(b, e);
+    }
+    let kd = op * hit.color(&kd);
+    if !is_black(kd) {
+        b.add(Bxdf::Lambertian(LambertianReflection { r: kd }));
+    }
+    let ks = op * hit.color(&ks);
+    if !is_black(ks) {
+        let ru = safe_roughness(hit.float(&urough));
+        let rv = vrough.map_or(ru, |v| safe_roughness(hit.float(&v)));
+        let (au, av) = if remap { (roughness_to_alpha(ru), roughness_to_alpha(rv)) } else { (ru, rv) };
+        b.add(Bxdf::MicrofacetReflection(MicrofacetReflection {
+            r: ks,
+            distribution: TrowbridgeReitz::new(au, av),
+            fresnel: Fresnel::Dielectric { eta_i: 1.0, eta_t: e },
+        }));
+    }
+    let kr = op * hit.color(&kr);
+    if !is_black(kr) {
+        b.add(Bxdf::SpecularReflection(SpecularReflection {
+            r: kr,
+            fresnel: Fresnel::Dielectric { eta_i: 1.0, eta_t: e },
+        }));
+    }
+    let kt = op * hit.color(&kt);
+    if !is_black(kt) {
+        b.add(Bxdf::SpecularTransmission(SpecularTransmission { t: kt, eta_a: 1.0, eta_b: e }));
+    }
+}
+
+/// Mix: the lobes of both parts, weighted by `amount` and 1 − `amount` (pbrt-v3's `MixMaterial`).
+fn mix(materials: &[Compiled], m: Compiled, hit: &Hit, depth: u32, b: &mut Bsdf) {
+    let Compiled::Mix { amount, materials: [m1, m2] } = m else { return };
+    // A part without a BSDF (`none`) adds no lobes (pbrt-v3 would dereference a null BSDF); lobes past
+    // the eighth are dropped (pbrt-v3 would abort; `Materials::build` warns).
+    let s1 = hit.color(&amount);
+    let s2 = clamp_spectrum(Spectrum::ONE - s1);
+    let deeper = depth < MAX_MIX_DEPTH;
+    if !(deeper && scatter(materials, m1, hit, depth + 1, b)) {
+        hit.reset(b, 1.0);
+    }
+    b.scale_all(s1);
+    // The second part needs storage of its own; mixes are rare enough for a local one.
+    let mut b2 = Bsdf::new(hit.si.ng, hit.si.ns, hit.si.dpdu, 1.0);
+    if deeper && scatter(materials, m2, hit, depth + 1, &mut b2) {
+        for (lobe, s) in b2.lobes() {
+            b.add_scaled(*lobe, s * s2);
+        }
+    }
+}
+
+/// Translucent: diffuse and glossy lobes reflected and transmitted (pbrt-v3's `TranslucentMaterial`).
+fn translucent(hit: &Hit, m: Compiled, b: &mut Bsdf) {
+    let Compiled::Translucent { kd, ks, reflect, transmit, roughness, remap } = m else { return };
+    let eta = 1.5;
+    hit.reset(b, eta);
+    let (r, t) = (hit.color(&reflect), hit.color(&transmit));
+    if is_black(r) && is_black(t) {
+        return;
+    }
+    let kd = hit.color(&kd);
+    if !is_black(kd) {
+        if !is_black(r) {
+            b.add(Bxdf::Lambertian(LambertianReflection { r: r * kd }));
+        }
+        if !is_black(t) {
+            b.add(Bxdf::LambertianTransmission(LambertianTransmission { t: t * kd }));
+        }
+    }
+    let ks = hit.color(&ks);
+    if !is_black(ks) {
+        let a = hit.alpha(&roughness, remap);
+        let distribution = TrowbridgeReitz::new(a, a);
+        if !is_black(r) {
+            b.add(Bxdf::MicrofacetReflection(MicrofacetReflection {
+                r: r * ks,
+                distribution,
+                fresnel: Fresnel::Dielectric { eta_i: 1.0, eta_t: eta },
+            }));
+        }
+        if !is_black(t) {
+            b.add(Bxdf::MicrofacetTransmission(MicrofacetTransmission {
+                t: t * ks,
+                distribution,
+                eta_a: 1.0,
+                eta_b: eta,
+            }));
+        }
+    }
 }
 
 #[allow(clippy::too_many_arguments)]
