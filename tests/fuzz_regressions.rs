@@ -14,7 +14,7 @@ use std::sync::Mutex;
 use cachert::Warnings;
 use cachert::image::{self, Image};
 use cachert::parse::integrator::IntegratorParams;
-use cachert::render::ao::AmbientOcclusion;
+use cachert::render::ambient_occlusion::AmbientOcclusion;
 use cachert::scene::shapes::{obj, ply};
 use cachert::scene::{LoadOptions, LoadedScene, load, load_str};
 use common::TempDir;

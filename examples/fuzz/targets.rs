@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use cachert::error::Warnings;
 use cachert::image::{self, Image};
 use cachert::parse::integrator::IntegratorParams;
-use cachert::render::ao::AmbientOcclusion;
+use cachert::render::ambient_occlusion::AmbientOcclusion;
 use cachert::scene::shapes::{obj, ply};
 use cachert::scene::{LoadOptions, load_str};
 

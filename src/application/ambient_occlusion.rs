@@ -10,6 +10,9 @@
 //!
 //! Registered as the integrator `cacheao`; its own parameters are [`CacheAo::PARAMETERS`]. The image holds
 //! AO in [0, 1], not pbrt-v3's π-scaled value.
+//!
+//! Its per-pixel counterpart, pbrt-v3's `ambientocclusion`, is `render::ambient_occlusion` (the same file
+//! name one layer down).
 
 use glam::Vec3A;
 

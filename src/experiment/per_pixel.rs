@@ -18,7 +18,7 @@ use crate::integrator::{RenderSettings, render};
 use crate::metrics::{Metric, compare};
 use crate::parse::integrator::IntegratorParams;
 use crate::parse::{Named, ParamList};
-use crate::scene::filter::{Filter, FilterKind};
+use crate::scene::filter::{FilterKind, FilterSpec};
 use crate::scene::{LoadedScene, Scene};
 
 use super::{Row, Sweep};
@@ -131,7 +131,7 @@ fn per_pixel(l: &mut LoadedScene, sweep: &Sweep, base: &Baseline, spp: u32, n: u
         ..Default::default()
     };
     // A box over the pixel, as the cache driver reconstructs its sub-pixel samples.
-    let saved = std::mem::replace(&mut l.scene.filter, Filter { radius: [0.5, 0.5], kind: FilterKind::Box });
+    let saved = std::mem::replace(&mut l.scene.filter, FilterSpec { radius: [0.5, 0.5], kind: FilterKind::Box });
     let result = render(&l.scene, None, &settings, &mut Warnings::default());
     l.scene.filter = saved;
     let out = result?;

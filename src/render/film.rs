@@ -4,7 +4,7 @@
 
 use crate::image::Image;
 use crate::scene::film::PixelBounds;
-use crate::scene::filter::Filter;
+use crate::scene::filter::FilterSpec;
 
 /// Weighted sums for a rectangle of pixels.
 #[derive(Clone, Debug)]
@@ -15,7 +15,7 @@ pub struct FilmTile {
 
 impl FilmTile {
     /// A tile for the samples of `sample_px` (its pixel rectangle grown by the filter radius, clipped to `image`).
-    pub fn new(sample_px: PixelBounds, filter: &Filter, image: &PixelBounds) -> Self {
+    pub fn new(sample_px: PixelBounds, filter: &FilterSpec, image: &PixelBounds) -> Self {
         let grow = |v: i32, r: f32, up: bool| {
             if up { (v as f32 - 0.5 + r).ceil() as i32 } else { (v as f32 + 0.5 - r).floor() as i32 }
         };
@@ -28,7 +28,7 @@ impl FilmTile {
 
     /// Adds radiance `l` seen through film position `p` (raster coordinates).
     #[inline]
-    pub fn add(&mut self, p: [f32; 2], l: [f32; 3], filter: &Filter) {
+    pub fn add(&mut self, p: [f32; 2], l: [f32; 3], filter: &FilterSpec) {
         let d = [p[0] - 0.5, p[1] - 0.5];
         let b = self.bounds;
         let x0 = ((d[0] - filter.radius[0]).ceil() as i32).max(b.min[0]);
@@ -103,7 +103,7 @@ mod tests {
     #[test]
     fn box_filter_puts_each_sample_in_its_own_pixel_and_tiles_merge_exactly() {
         let image = PixelBounds { min: [0, 0], max: [4, 2] };
-        let f = Filter::default();
+        let f = FilterSpec::default();
         let mut film = Film::new(image);
         for tx in 0..2 {
             let px = PixelBounds { min: [2 * tx, 0], max: [2 * tx + 2, 2] };
@@ -124,7 +124,7 @@ mod tests {
     #[test]
     fn wide_filters_spread_samples_to_neighbours() {
         let image = PixelBounds { min: [0, 0], max: [3, 3] };
-        let f = Filter { radius: [1.5, 1.5], kind: FilterKind::Triangle };
+        let f = FilterSpec { radius: [1.5, 1.5], kind: FilterKind::Triangle };
         let mut tile = FilmTile::new(PixelBounds { min: [1, 1], max: [2, 2] }, &f, &image);
         tile.add([1.5, 1.5], [1.0, 1.0, 1.0], &f);
         let mut film = Film::new(image);

@@ -5,7 +5,7 @@
 //! Depends on `scene` (what to render), `shading`, `sampling`, `parse` (their parameters) and `image`; never
 //! on `application`, `placement` or the cache driver (`integrator` dispatches by name above both).
 
-pub mod ao;
+pub mod ambient_occlusion;
 pub mod directlighting;
 pub mod film;
 pub mod path;
@@ -50,7 +50,7 @@ pub fn per_pixel_integrator<'a>(
     warnings: &mut Warnings,
 ) -> Result<Option<Box<dyn PixelIntegrator + 'a>>> {
     Ok(Some(match name {
-        "ambientocclusion" => Box::new(ao::AmbientOcclusion::from_params(p, sampler, quick)?),
+        "ambientocclusion" => Box::new(ambient_occlusion::AmbientOcclusion::from_params(p, sampler, quick)?),
         "directlighting" => Box::new(directlighting::DirectLighting::from_params(p, scene, sampler, quick, warnings)?),
         "path" => Box::new(path::Path::from_params(p, scene, warnings)?),
         _ => return Ok(None),

@@ -8,7 +8,7 @@ use crate::parse::Named;
 
 /// A separable reconstruction filter with its radius.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Filter {
+pub struct FilterSpec {
     /// Half-width in pixels along x and y (pbrt's `xwidth`/`ywidth`).
     pub radius: [f32; 2],
     /// Which filter.
@@ -45,15 +45,15 @@ pub enum FilterKind {
     },
 }
 
-impl Default for Filter {
+impl Default for FilterSpec {
     fn default() -> Self {
-        Filter { radius: [0.5, 0.5], kind: FilterKind::Box }
+        FilterSpec { radius: [0.5, 0.5], kind: FilterKind::Box }
     }
 }
 
-impl Filter {
+impl FilterSpec {
     /// Builds the filter named by a `PixelFilter` directive (pbrt-v3 defaults per type).
-    pub fn from_directive(d: &Named, _warnings: &mut Warnings) -> Result<Filter> {
+    pub fn from_directive(d: &Named, _warnings: &mut Warnings) -> Result<FilterSpec> {
         let p = &d.params;
         let default_r = match d.name.as_str() {
             "box" => 0.5,
@@ -86,7 +86,7 @@ impl Filter {
             }
             _ => FilterKind::Sinc { tau: p.float_or("tau", 3.0)? as f32 },
         };
-        Ok(Filter { radius: [rx, ry], kind })
+        Ok(FilterSpec { radius: [rx, ry], kind })
     }
 
     /// The filter weight at offset (x, y) from the pixel centre (0 outside the radius).
@@ -132,15 +132,15 @@ mod tests {
 
     #[test]
     fn shapes_match_pbrt_v3() {
-        let b = Filter::default();
+        let b = FilterSpec::default();
         assert_eq!(b.eval(0.49, -0.49), 1.0);
         assert_eq!(b.eval(0.51, 0.0), 0.0);
-        let t = Filter { radius: [2.0, 2.0], kind: FilterKind::Triangle };
+        let t = FilterSpec { radius: [2.0, 2.0], kind: FilterKind::Triangle };
         assert_eq!(t.eval(1.0, 0.0), 2.0);
-        let m = Filter { radius: [2.0, 2.0], kind: FilterKind::Mitchell { b: 1.0 / 3.0, c: 1.0 / 3.0 } };
+        let m = FilterSpec { radius: [2.0, 2.0], kind: FilterKind::Mitchell { b: 1.0 / 3.0, c: 1.0 / 3.0 } };
         assert!((m.eval(0.0, 0.0) - (16.0 / 18.0f32).powi(2)).abs() < 1e-6);
         assert!(m.eval(2.0, 0.0).abs() < 1e-6);
-        let s = Filter { radius: [4.0, 4.0], kind: FilterKind::Sinc { tau: 3.0 } };
+        let s = FilterSpec { radius: [4.0, 4.0], kind: FilterKind::Sinc { tau: 3.0 } };
         assert!((s.eval(0.0, 0.0) - 1.0).abs() < 1e-6 && s.eval(1.0, 0.0).abs() < 1e-6);
     }
 }

@@ -36,7 +36,7 @@ pub const AREA_SCHEMA: &[(&str, Kind)] =
 
 /// A light source that is not attached to a shape.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Light {
+pub struct LightSpec {
     /// pbrt-v3 type name.
     pub type_name: String,
     /// The values given.
@@ -49,7 +49,7 @@ pub struct Light {
 
 /// An emitting shape: a mesh or quadric with a diffuse area light.
 #[derive(Clone, Debug, PartialEq)]
-pub struct AreaLight {
+pub struct AreaLightSpec {
     /// The values given.
     pub props: Props,
     /// The emitting shape.

@@ -192,7 +192,7 @@ impl MaterialKind {
 /// A material with the parameter values the scene gave it (absent values take pbrt-v3's defaults when the
 /// material is evaluated).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Material {
+pub struct MaterialSpec {
     /// The pbrt-v3 type name as written (`"matte"`, `"uber"`, …).
     pub type_name: String,
     /// The type.
@@ -207,10 +207,10 @@ pub struct Material {
     pub param_locs: Vec<(&'static str, SourceLoc)>,
 }
 
-impl Material {
+impl MaterialSpec {
     /// pbrt-v3's default material: matte with Kd 0.5.
     pub fn default_matte() -> Self {
-        Material {
+        MaterialSpec {
             type_name: "matte".into(),
             kind: MaterialKind::Matte,
             props: Props::default(),

@@ -1,6 +1,11 @@
 //! STAGE 2: directives → a [`Scene`]: camera, film, sampler and filter settings, geometry with its BVHs,
 //! materials, textures and lights.
 //!
+//! The scene keeps *descriptions*: what the file said, checked and with its source locations
+//! ([`film::FilmSpec`], [`sampler::SamplerSpec`], [`filter::FilterSpec`], [`material::MaterialSpec`],
+//! [`texture::TextureSpec`], [`light::LightSpec`], [`light::AreaLightSpec`]). `shading` builds the evaluated
+//! objects from them (`Materials`, `Textures`, `Lights`), and `render` the film that accumulates samples.
+//!
 //! [`load`] runs stages 1 and 2 for a scene file. Depends on `parse` (for directives) and `sampling`;
 //! nothing here knows about integrators, caches or images.
 
@@ -66,19 +71,19 @@ pub struct Scene {
     /// Film settings.
     pub film: film::FilmSpec,
     /// Pixel reconstruction filter.
-    pub filter: filter::Filter,
+    pub filter: filter::FilterSpec,
     /// Sampler settings.
     pub sampler: sampler::SamplerSpec,
     /// Everything rays can hit.
     pub geometry: geometry::Geometry,
     /// Materials; id 0 is pbrt-v3's default matte.
-    pub materials: Vec<material::Material>,
+    pub materials: Vec<material::MaterialSpec>,
     /// Textures.
-    pub textures: Vec<texture::Texture>,
+    pub textures: Vec<texture::TextureSpec>,
     /// Non-area light sources.
-    pub lights: Vec<light::Light>,
+    pub lights: Vec<light::LightSpec>,
     /// Emitting shapes.
-    pub area_lights: Vec<light::AreaLight>,
+    pub area_lights: Vec<light::AreaLightSpec>,
     /// Where the scene wrote the render options that integrators may not use (so they can say so).
     pub declared: Declared,
 }

@@ -63,7 +63,7 @@ pub fn schema(class: &str, value: TextureValue) -> Option<Vec<(&'static str, Kin
 
 /// A declared texture.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Texture {
+pub struct TextureSpec {
     /// Its name in the scene.
     pub name: String,
     /// Float or colour.

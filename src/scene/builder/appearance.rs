@@ -7,10 +7,10 @@ use crate::error::{Error, Result, SourceLoc};
 use crate::parse::Named;
 use crate::scene::accel::{InstanceXf, Shapes, check_extent};
 use crate::scene::geometry::ObjectDef;
-use crate::scene::light::{self, Light};
-use crate::scene::material::{Material, MaterialKind};
+use crate::scene::light::{self, LightSpec};
+use crate::scene::material::{MaterialKind, MaterialSpec};
 use crate::scene::props::{Capture, Prop, Props};
-use crate::scene::texture::{self, Texture, TextureValue};
+use crate::scene::texture::{self, TextureSpec, TextureValue};
 use crate::scene::transform::transform_bounds;
 
 use super::state::Block;
@@ -24,7 +24,7 @@ impl SceneBuilder {
             None => {
                 self.warnings.at(type_loc, format!("unknown material type \"{type_name}\"; using matte"));
                 n.params.mark_all_used();
-                self.materials.push(Material { loc: Some(type_loc.clone()), ..Material::default_matte() });
+                self.materials.push(MaterialSpec { loc: Some(type_loc.clone()), ..MaterialSpec::default_matte() });
                 return Ok(self.materials.len() as u32 - 1);
             }
         };
@@ -53,7 +53,7 @@ impl SceneBuilder {
         }
         let param_locs =
             kind.schema().iter().filter_map(|&(name, _)| n.params.loc_of(name).map(|l| (name, l.clone()))).collect();
-        self.materials.push(Material {
+        self.materials.push(MaterialSpec {
             type_name: type_name.to_string(),
             kind,
             props,
@@ -151,7 +151,7 @@ impl SceneBuilder {
         let texture_from_world =
             self.ctm[0].inverse().to_affine().map_err(|e| Error::at(loc, format!("Texture: {e}")))?;
         let id = self.textures.len() as u32;
-        self.textures.push(Texture {
+        self.textures.push(TextureSpec {
             name: name.clone(),
             value,
             class: class_name,
@@ -179,7 +179,7 @@ impl SceneBuilder {
             .read(&n.params, schema, &mut props)?;
         self.report_unused(&n.params, "LightSource");
         let world_from_light = self.ctm[0].to_affine().map_err(|e| Error::at(loc, format!("LightSource: {e}")))?;
-        self.lights.push(Light { type_name: n.name, props, world_from_light, loc: loc.clone() });
+        self.lights.push(LightSpec { type_name: n.name, props, world_from_light, loc: loc.clone() });
         Ok(())
     }
 

@@ -24,12 +24,12 @@ use crate::parse::{Directive, DirectiveKind, Named, ParamList};
 use crate::scene::accel::{Accel, BuildPrim, PrimRef};
 use crate::scene::camera::Camera;
 use crate::scene::geometry::{Geometry, ObjectDef, ShapeInfo};
-use crate::scene::light::{AreaLight, Light};
-use crate::scene::material::Material;
+use crate::scene::light::{AreaLightSpec, LightSpec};
+use crate::scene::material::MaterialSpec;
 use crate::scene::mesh::TriangleMesh;
 use crate::scene::shapes::curve::{Curve, CurveSegment};
 use crate::scene::shapes::quadric::Quadric;
-use crate::scene::texture::Texture;
+use crate::scene::texture::TextureSpec;
 use crate::scene::transform::Transform;
 use crate::scene::{LoadOptions, LoadStats, LoadedScene, Scene};
 use state::{Block, Frame, GraphicsState};
@@ -69,16 +69,16 @@ pub(crate) struct SceneBuilder {
     film: crate::scene::film::FilmSpec,
     film_loc: Option<SourceLoc>,
     sampler: crate::scene::sampler::SamplerSpec,
-    filter: crate::scene::filter::Filter,
+    filter: crate::scene::filter::FilterSpec,
     declared: crate::scene::Declared,
     integrator: Option<Named>,
     media: HashMap<String, SourceLoc>,
     media_warned: bool,
     // World contents.
-    materials: Vec<Material>,
-    textures: Vec<Texture>,
-    lights: Vec<Light>,
-    area_lights: Vec<AreaLight>,
+    materials: Vec<MaterialSpec>,
+    textures: Vec<TextureSpec>,
+    lights: Vec<LightSpec>,
+    area_lights: Vec<AreaLightSpec>,
     meshes: Vec<TriangleMesh>,
     top: Vec<BuildPrim>,
     quadrics: Vec<Quadric>,
@@ -115,7 +115,7 @@ impl SceneBuilder {
             integrator: None,
             media: HashMap::new(),
             media_warned: false,
-            materials: vec![Material::default_matte()],
+            materials: vec![MaterialSpec::default_matte()],
             textures: Vec::new(),
             lights: Vec::new(),
             area_lights: Vec::new(),

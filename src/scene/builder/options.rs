@@ -4,7 +4,7 @@
 use crate::error::{Result, SourceLoc};
 use crate::parse::Named;
 use crate::scene::film::{FilmSpec, check_memory};
-use crate::scene::filter::Filter;
+use crate::scene::filter::FilterSpec;
 use crate::scene::sampler::SamplerSpec;
 
 use super::SceneBuilder;
@@ -42,7 +42,7 @@ impl SceneBuilder {
     }
 
     pub(super) fn filter_directive(&mut self, n: Named) -> Result<()> {
-        self.filter = Filter::from_directive(&n, &mut self.warnings)?;
+        self.filter = FilterSpec::from_directive(&n, &mut self.warnings)?;
         self.declared.filter = Some(n.name_loc.clone());
         self.report_unused(&n.params, "PixelFilter");
         Ok(())

@@ -11,7 +11,7 @@ use crate::error::{Error, Result, SourceLoc};
 use crate::parse::{Named, TexOr};
 use crate::scene::accel::check_extent;
 use crate::scene::geometry::{ShapeId, ShapeInfo};
-use crate::scene::light::AreaLight;
+use crate::scene::light::AreaLightSpec;
 use crate::scene::mesh::{TriangleMesh, trianglemesh_params};
 use crate::scene::props::{Capture, schema_has};
 use crate::scene::shapes::curve::Curve;
@@ -176,7 +176,7 @@ impl SceneBuilder {
             return;
         };
         let id = self.area_lights.len() as u32;
-        self.area_lights.push(AreaLight { props, shape, loc: light_loc });
+        self.area_lights.push(AreaLightSpec { props, shape, loc: light_loc });
         match shape {
             ShapeId::Mesh(m) => self.meshes[m as usize].area_light = Some(id),
             ShapeId::Quadric(q) => self.quadric_info[q as usize].area_light = Some(id),

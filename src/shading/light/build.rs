@@ -15,7 +15,7 @@ use super::{DistantLight, Entry, Kind, Lights, NO_LIGHT, PointLight, SpotLight};
 use crate::error::{Error, Result, SourceLoc, Warnings};
 use crate::scene::Scene;
 use crate::scene::geometry::ShapeId;
-use crate::scene::light::Light;
+use crate::scene::light::LightSpec;
 use crate::scene::props::{Prop, Props};
 use crate::shading::Spectrum;
 
@@ -118,7 +118,7 @@ impl<'a> Lights<'a> {
         Ok(lights)
     }
 
-    fn add_light(&mut self, light: &Light, world_radius: f32, warnings: &mut Warnings) -> Result<()> {
+    fn add_light(&mut self, light: &LightSpec, world_radius: f32, warnings: &mut Warnings) -> Result<()> {
         let loc = &light.loc;
         let ty = light.type_name.as_str();
         let what = format!("LightSource \"{ty}\"");
@@ -245,7 +245,7 @@ impl<'a> Lights<'a> {
 }
 
 /// A `spot` light: position, cone and axis from "from" and "to" in the light's space.
-fn spot_light(light: &Light, what: &str) -> Result<SpotLight> {
+fn spot_light(light: &LightSpec, what: &str) -> Result<SpotLight> {
     let (loc, props, xf) = (&light.loc, &light.props, light.world_from_light);
     let m: Mat3A = xf.matrix3;
     let i = colour(props, "I", what, loc)?;
@@ -272,7 +272,7 @@ fn spot_light(light: &Light, what: &str) -> Result<SpotLight> {
 /// An `infinite` light with its environment map (the constant L, with a warning, when the map cannot be
 /// read, as pbrt-v3 does); `None`, with a warning, when it emits nothing.
 fn infinite_light(
-    light: &Light,
+    light: &LightSpec,
     what: &str,
     world_radius: f32,
     warnings: &mut Warnings,

@@ -6,7 +6,7 @@
 //! Depends on `scene::material` and [`super::param`].
 
 use crate::error::Warnings;
-use crate::scene::material::{Material, MaterialKind};
+use crate::scene::material::{MaterialKind, MaterialSpec};
 use crate::shading::Spectrum;
 
 use super::param::{FloatParam, Reader, SpecParam};
@@ -140,7 +140,7 @@ impl Compiled {
 }
 
 /// Compiles material `m`; `copper` is the default (η, k) of metal.
-pub fn compile(m: &Material, copper: (Spectrum, Spectrum), warnings: &mut Warnings) -> Compiled {
+pub fn compile(m: &MaterialSpec, copper: (Spectrum, Spectrum), warnings: &mut Warnings) -> Compiled {
     use MaterialKind as K;
     let mut r = Reader { m, warnings };
     if m.props.get("bumpmap").is_some() {

@@ -16,7 +16,7 @@ use crate::shading::bsdf::{Bsdf, MAX_LOBES};
 use crate::shading::texture::Textures;
 
 use compile::Compiled;
-use scatter::Hit;
+use scatter::MaterialHit;
 
 /// The scene's materials, ready to shade (same ids as `Scene::materials`).
 #[derive(Debug, Default)]
@@ -89,7 +89,13 @@ impl Materials {
         allow_multiple_lobes: bool,
         out: &mut Bsdf,
     ) -> bool {
-        scatter::scatter(&self.compiled, id, &Hit { si, textures, multiple_lobes: allow_multiple_lobes }, 0, out)
+        scatter::scatter(
+            &self.compiled,
+            id,
+            &MaterialHit { si, textures, multiple_lobes: allow_multiple_lobes },
+            0,
+            out,
+        )
     }
 
     /// Materials defined in the scene file by type name, sorted by name (the built-in default matte is not

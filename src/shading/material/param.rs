@@ -7,7 +7,7 @@
 
 use crate::error::Warnings;
 use crate::scene::geometry::SurfaceInteraction;
-use crate::scene::material::Material;
+use crate::scene::material::MaterialSpec;
 use crate::scene::props::Prop;
 use crate::shading::Spectrum;
 use crate::shading::texture::Textures;
@@ -68,7 +68,7 @@ pub fn clamp_spectrum(v: Spectrum) -> Spectrum {
 /// Reads one scene material's values, warning about bad constants.
 pub struct Reader<'a> {
     /// The material.
-    pub m: &'a Material,
+    pub m: &'a MaterialSpec,
     /// Where warnings go.
     pub warnings: &'a mut Warnings,
 }

@@ -19,7 +19,7 @@ use super::param::{FloatParam, clamp_spectrum, safe_ior, safe_roughness};
 const MAX_MIX_DEPTH: u32 = 16;
 
 /// What a hit needs to build a BSDF.
-pub struct Hit<'a> {
+pub struct MaterialHit<'a> {
     /// The surface point.
     pub si: &'a SurfaceInteraction,
     /// The scene's textures.
@@ -29,7 +29,7 @@ pub struct Hit<'a> {
     pub multiple_lobes: bool,
 }
 
-impl Hit<'_> {
+impl MaterialHit<'_> {
     fn color(&self, p: &super::param::SpecParam) -> Spectrum {
         p.eval_clamped(self.si, self.textures)
     }
@@ -55,7 +55,7 @@ fn is_black(s: Spectrum) -> bool {
 
 /// Fills `b` with the BSDF of material `id` at the hit; false (and `b` untouched) for a material without
 /// one. `b` is overwritten, not allocated: callers keep one per path (see [`Bsdf::reset`]).
-pub fn scatter(materials: &[Compiled], id: u32, hit: &Hit, depth: u32, b: &mut Bsdf) -> bool {
+pub fn scatter(materials: &[Compiled], id: u32, hit: &MaterialHit, depth: u32, b: &mut Bsdf) -> bool {
     let m = materials.get(id as usize).copied().unwrap_or(Compiled::None);
     match m {
         Compiled::None => return false,
@@ -125,7 +125,7 @@ pub fn scatter(materials: &[Compiled], id: u32, hit: &Hit, depth: u32, b: &mut B
 
 /// Uber: pbrt-v3's `UberMaterial` — an opacity's specular pass-through, diffuse, glossy, specular reflection
 /// and transmission lobes.
-fn uber(hit: &Hit, m: Compiled, b: &mut Bsdf) {
+fn uber(hit: &MaterialHit, m: Compiled, b: &mut Bsdf) {
     let Compiled::Uber { kd, ks, kr, kt, urough, vrough, eta, opacity, remap } = m else { return };
     let e = safe_ior(hit.float(&eta));
     let op = hit.color(&opacity);
@@ -165,7 +165,7 @@ fn uber(hit: &Hit, m: Compiled, b: &mut Bsdf) {
 }
 
 /// Mix: the lobes of both parts, weighted by `amount` and 1 − `amount` (pbrt-v3's `MixMaterial`).
-fn mix(materials: &[Compiled], m: Compiled, hit: &Hit, depth: u32, b: &mut Bsdf) {
+fn mix(materials: &[Compiled], m: Compiled, hit: &MaterialHit, depth: u32, b: &mut Bsdf) {
     let Compiled::Mix { amount, materials: [m1, m2] } = m else { return };
     // A part without a BSDF (`none`) adds no lobes (pbrt-v3 would dereference a null BSDF); lobes past
     // the eighth are dropped (pbrt-v3 would abort; `Materials::build` warns).
@@ -186,7 +186,7 @@ fn mix(materials: &[Compiled], m: Compiled, hit: &Hit, depth: u32, b: &mut Bsdf)
 }
 
 /// Translucent: diffuse and glossy lobes reflected and transmitted (pbrt-v3's `TranslucentMaterial`).
-fn translucent(hit: &Hit, m: Compiled, b: &mut Bsdf) {
+fn translucent(hit: &MaterialHit, m: Compiled, b: &mut Bsdf) {
     let Compiled::Translucent { kd, ks, reflect, transmit, roughness, remap } = m else { return };
     let eta = 1.5;
     hit.reset(b, eta);
@@ -227,7 +227,7 @@ fn translucent(hit: &Hit, m: Compiled, b: &mut Bsdf) {
 
 #[allow(clippy::too_many_arguments)]
 fn glass(
-    hit: &Hit,
+    hit: &MaterialHit,
     kr: super::param::SpecParam,
     kt: super::param::SpecParam,
     eta: FloatParam,

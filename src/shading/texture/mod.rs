@@ -31,7 +31,7 @@ use crate::error::{Result, Warnings};
 use crate::scene::Scene;
 use crate::scene::geometry::SurfaceInteraction;
 use crate::scene::props::{Prop, Props};
-use crate::scene::texture::{Texture, TextureValue};
+use crate::scene::texture::{TextureSpec, TextureValue};
 
 use super::Spectrum;
 use imagemap::ImageKey;
@@ -90,7 +90,7 @@ impl Textures {
     }
 
     /// The node for texture `id`, loading its image if it has one.
-    fn node(&mut self, tex: &Texture, id: usize, cache: &mut HashMap<ImageKey, u32>, w: &mut Warnings) -> Node {
+    fn node(&mut self, tex: &TextureSpec, id: usize, cache: &mut HashMap<ImageKey, u32>, w: &mut Warnings) -> Node {
         let p = &tex.props;
         let float = tex.value == TextureValue::Float;
         let warn = |w: &mut Warnings, msg: String| w.at(&tex.loc, format!("texture \"{}\": {msg}", tex.name));
@@ -159,7 +159,7 @@ impl Textures {
 
     /// The index of the loaded image an imagemap texture reads (loaded now unless an earlier texture
     /// read the same file with the same settings).
-    fn image(&mut self, tex: &Texture, float: bool, cache: &mut HashMap<ImageKey, u32>, w: &mut Warnings) -> u32 {
+    fn image(&mut self, tex: &TextureSpec, float: bool, cache: &mut HashMap<ImageKey, u32>, w: &mut Warnings) -> u32 {
         let p = &tex.props;
         let path = p.str("filename").unwrap_or("");
         let wrap_name = p.str("wrap").unwrap_or("repeat");

@@ -3,7 +3,8 @@
 //! shadow rays spawned like pbrt-v3's `SpawnRay` (or bounded by pbrt-v4's `maxdistance`), and the estimator
 //! Σ cos θ / (pdf · n), which is π where nothing occludes. Surfaces without a material are passed through.
 //!
-//! This per-pixel integrator is the brute-force reference the cache-based applications are measured against.
+//! This per-pixel integrator is the brute-force reference the cache-based applications are measured against;
+//! its cached counterpart, `cacheao`, is `application::ambient_occlusion` (the same file name one layer up).
 
 use glam::Vec3A;
 
