@@ -1,117 +1,163 @@
-//! Behaviour of `cachert experiment`: the sweep's rows, files and table on a shipped scene, the error
-//! falling with the budget, the per-pixel comparison against the converged image, and the reference being
-//! reused on a second run; `--replot` redraws a finished sweep's charts from its results.csv; an
-//! importance-caching sweep times both of its many-light baselines.
+//! Behaviour of the flag form of `cachert experiment`: it builds a spec and runs it as the spec form does,
+//! so it writes the one `results.csv` schema and the one set of tables; the error falls with the budget;
+//! the per-pixel baselines are measured against the converged image; the reference is reused on a second
+//! run and not with other parameters; `--replot` rebuilds the tables and charts from results.csv alone; an
+//! importance-caching sweep times both of its many-light baselines; bad flags are usage errors.
 
 mod common;
 
 use std::path::Path;
+use std::process::{Command, Output};
 
-use cachert::experiment::{Sweep, run};
-use cachert::integrator::cache::Placement;
+use cachert::experiment::jobs::Record;
+use cachert::experiment::results::read_csv;
 
-fn sweep(out: &Path, baseline_samples: Vec<u32>) -> Sweep {
-    Sweep {
-        scenes: vec![Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/spheres.pbrt")],
-        resolution: Some([48, 32]),
-        caches: vec![40, 320],
-        integrator: "cacheao".into(),
-        placements: vec![Placement::parse("im").unwrap(), Placement::parse("vgc+dgs").unwrap()],
-        seeds: 2,
-        set: vec![],
-        out: out.to_path_buf(),
-        threads: Some(2),
-        baseline_samples,
-    }
+fn cachert(args: &[&str], out: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_cachert")).arg("experiment").args(args).arg("--out").arg(out).output().unwrap()
+}
+
+fn spheres() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/spheres.pbrt").display().to_string()
+}
+
+/// The flag form's sweep on the spheres: 2 budgets × 2 placements × 2 seeds, with baselines `extra`.
+fn sweep(out: &Path, extra: &[&str]) -> Output {
+    let scene = spheres();
+    let mut args = vec![
+        "--scene",
+        &scene,
+        "--integrator",
+        "cacheao",
+        "--resolution",
+        "48x32",
+        "--caches",
+        "40,320",
+        "--placements",
+        "im,vgc+dgs",
+        "--seeds",
+        "2",
+        "--nthreads",
+        "2",
+    ];
+    args.extend_from_slice(extra);
+    let o = cachert(&args, out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    o
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 #[test]
-fn a_sweep_writes_every_row_and_its_files_and_reuses_the_reference() {
+fn the_flag_form_writes_the_one_schema_and_its_tables_and_reuses_the_reference() {
     let dir = common::TempDir::new("experiment");
-    let mut log = Vec::new();
-    let (rows, table) = run(&sweep(&dir.0, vec![1, 16]), &mut |l| log.push(l.to_string())).unwrap();
-    // 2 budgets × 2 placements × 2 seeds, plus `none` and two `ao:N` rows.
+    let first = sweep(&dir.0, &["--baseline-samples", "1,16"]);
+    assert!(stderr(&first).contains("scenes-spheres-cacheao-none:"), "{}", stderr(&first));
+    let rows: Vec<Record> = read_csv(&dir.path("results.csv")).unwrap();
+    // 2 budgets × 2 placements × 2 seeds, the converged image and two `ao:N` rows.
     assert_eq!(rows.len(), 11, "{rows:#?}");
-    assert!(log.iter().any(|l| l.contains("reference in")), "{log:?}");
+    let header = std::fs::read_to_string(dir.path("results.csv")).unwrap();
+    assert!(header.starts_with("id,status,error,scene,application,placement,method,samples,caches,seed,"), "{header}");
+    assert!(rows.iter().all(|r| r.status == "ok" && r.resolution == Some([48, 32])), "{rows:#?}");
     for p in ["im", "vgc+dgs"] {
         let err = |c: usize| rows.iter().filter(|r| r.placement == p && r.caches == c).map(|r| r.rmse).sum::<f64>();
         assert!(err(320) < err(40), "{p}: the error must fall as caches grow");
     }
-    // Seed-0 renders and the per-pixel ones are also measured against the converged image; more rays, less
+    // Seed-0 renders and the baselines are also measured against the converged image; more rays, less
     // error.
-    assert!(rows.iter().all(|r| r.converged.is_some() == (r.seed == 0)), "{rows:#?}");
-    let conv = |p: &str| rows.iter().find(|r| r.placement == p).and_then(|r| r.converged).unwrap().0;
+    for r in &rows {
+        assert_eq!(r.rmse_converged.is_some(), r.seed == 0 && r.method != "converged", "{r:#?}");
+    }
+    let conv = |m: &str| rows.iter().find(|r| r.method == m).and_then(|r| r.rmse_converged).unwrap();
     assert!(conv("ao:16") < conv("ao:1"));
-    let csv = std::fs::read_to_string(dir.path("results.csv")).unwrap();
-    assert_eq!(csv.lines().count(), 12);
-    assert!(dir.path("results.json").is_file() && dir.path("scenes-spheres-cacheao-converged.exr").is_file());
-    assert!(table.contains("| vgc+dgs |") && table.contains("converged"), "{table}");
+    assert!(dir.path("results.json").is_file() && dir.path("report.html").is_file());
+    let tables = std::fs::read_to_string(dir.path("tables.md")).unwrap();
+    for t in ["## Which method wins", "## Ratios to IM", "## At equal time", "## Against the converged", "| vgc+dgs |"]
+    {
+        assert!(tables.contains(t), "{t}: {tables}");
+    }
 
-    // `--replot` draws the same chart again from results.csv alone (its numbers are rounded there, so the
-    // drawing may move by a pixel: the series and the axes are compared, not the bytes).
-    let svgs: Vec<String> = dir.entries().into_iter().filter(|n| n.ends_with("-error-vs-time.svg")).collect();
-    assert_eq!(svgs.len(), 1, "{:?}", dir.entries());
-    let drawn = std::fs::read_to_string(dir.path(&svgs[0])).unwrap();
+    // `--replot` rebuilds the same tables from results.csv alone, and the charts.
+    let svgs: Vec<String> = dir.entries().into_iter().filter(|n| n.ends_with(".svg")).collect();
+    assert_eq!(svgs.len(), 2, "{:?}", dir.entries());
+    std::fs::remove_file(dir.path("tables.md")).unwrap();
     std::fs::remove_file(dir.path(&svgs[0])).unwrap();
-    let written = cachert::experiment::replot::replot(&dir.0).unwrap();
-    assert_eq!(written, vec![dir.path(&svgs[0])]);
-    let redrawn = std::fs::read_to_string(&written[0]).unwrap();
-    let texts = |svg: &str| -> Vec<String> {
-        svg.split("<text")
-            .skip(1)
-            .map(|t| t.split_once('>').unwrap().1.split('<').next().unwrap().trim().to_string())
-            .collect()
-    };
-    assert_eq!(texts(&drawn), texts(&redrawn), "the same series, ticks and labels");
-    let labels = texts(&redrawn);
-    assert!(["ao", "im", "vgc+dgs", "wall seconds (log)"].iter().all(|w| labels.iter().any(|t| t == w)), "{labels:?}");
+    let o = Command::new(env!("CARGO_BIN_EXE_cachert")).args(["experiment", "--replot"]).arg(&dir.0).output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(dir.path("tables.md")).unwrap(), tables);
+    assert!(dir.path(&svgs[0]).is_file());
 
     // A second sweep reuses the stored reference and converged image.
-    let mut log = Vec::new();
-    run(&sweep(&dir.0, vec![1]), &mut |l| log.push(l.to_string())).unwrap();
-    assert!(!log.iter().any(|l| l.contains("reference in") || l.contains("converged per-pixel image")), "{log:?}");
+    let again = sweep(&dir.0, &["--baseline-samples", "1"]);
+    assert!(stderr(&again).contains("0 to run"), "{}", stderr(&again));
 
-    // Other parameters (here the ray length) make their own reference instead of reusing that one.
-    let mut other = sweep(&dir.0, vec![1]);
-    other.set = vec![("maxdistance".into(), "0.3".into())];
-    let mut log = Vec::new();
-    run(&other, &mut |l| log.push(l.to_string())).unwrap();
-    assert!(log.iter().any(|l| l.contains("reference in")), "{log:?}");
-    assert!(log.iter().any(|l| l.contains("converged per-pixel image")), "{log:?}");
+    // Other parameters (here the ray length) make their own reference and converged image.
+    let other = sweep(&dir.0, &["--baseline-samples", "1", "--set", "maxdistance=0.3"]);
+    let log = stderr(&other);
+    assert!(log.contains("-none-") && log.contains("-converged-"), "{log}");
 }
 
 #[test]
 fn an_importance_caching_sweep_times_both_many_light_baselines() {
     let dir = common::TempDir::new("experiment-imc");
-    let s = Sweep {
-        scenes: vec![Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/room.pbrt")],
-        resolution: Some([24, 18]),
-        caches: vec![16],
-        integrator: "importancecache".into(),
-        placements: vec![Placement::parse("vgc+dgs").unwrap()],
-        seeds: 1,
-        set: vec![("vpls".into(), "64".into())],
-        ..sweep(&dir.0, vec![1, 8])
-    };
-    let (rows, _) = run(&s, &mut |_| {}).unwrap();
-    let names: Vec<&str> = rows.iter().map(|r| r.placement.as_str()).collect();
-    assert_eq!(names, ["none", "power:1", "power:8", "uniform:1", "uniform:8", "vgc+dgs"], "{rows:#?}");
+    let room = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/room.pbrt").display().to_string();
+    let args = [
+        "--scene",
+        &room,
+        "--integrator",
+        "importancecache",
+        "--resolution",
+        "24x18",
+        "--caches",
+        "16",
+        "--placements",
+        "vgc+dgs",
+        "--seeds",
+        "1",
+        "--set",
+        "vpls=64",
+        "--baseline-samples",
+        "1,8",
+    ];
+    let o = cachert(&args, &dir.0);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows = read_csv(&dir.path("results.csv")).unwrap();
+    let names: Vec<&str> = rows.iter().map(|r| r.method.as_str()).collect();
+    assert_eq!(names, ["converged", "power:1", "uniform:1", "power:8", "uniform:8", "vgc+dgs"], "{rows:#?}");
     // Both estimate the reference's sum: more draws, less error against it.
-    let err = |p: &str| rows.iter().find(|r| r.placement == p).unwrap().rmse;
+    let err = |m: &str| rows.iter().find(|r| r.method == m).unwrap().rmse;
     assert!(err("power:8") < err("power:1") && err("uniform:8") < err("uniform:1"), "{rows:#?}");
+}
+
+#[test]
+fn bad_flags_are_usage_errors_and_render_nothing() {
+    let dir = common::TempDir::new("experiment-bad");
+    let scene = spheres();
+    for (args, want) in [
+        (vec!["--scene", &scene, "--placements", "im,vgc+foo"], "vgc+foo"),
+        (vec!["--scene", &scene, "--placements", "none"], "reference"),
+        (vec!["--scene", &scene, "--caches", "0"], "--caches"),
+        (vec!["--scene", &scene, "--seeds", "0"], "seeds"),
+        (vec!["--scene", &scene, "--integrator", "path"], "not a cache-based integrator"),
+        (vec!["--scene", &scene, "--baseline-samples", "x"], "--baseline-samples"),
+    ] {
+        let o = cachert(&args, &dir.path("out"));
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(want) && !stderr(&o).contains("panicked"), "{args:?}: {}", stderr(&o));
+    }
+    assert!(!dir.path("out").join("runs").exists() || dir.path("out").join("runs").read_dir().unwrap().count() == 0);
 }
 
 #[test]
 fn replot_refuses_a_bad_results_file_with_its_line_and_column_and_writes_nothing() {
     let dir = common::TempDir::new("replot-bad");
-    dir.write("results.csv", "scene,placement,caches,seed,rmse,flip,total_s\nbox,vgc,100,0,0.1,zero,2.0\n");
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_cachert"))
-        .args(["experiment", "--replot"])
-        .arg(&dir.0)
-        .output()
-        .unwrap();
+    let head = "id,status,scene,application,placement,method,caches,seed,rmse,flip,total_s";
+    dir.write("results.csv", format!("{head}\na,ok,box,cacheao,vgc,vgc,100,0,0.1,zero,2.0\n"));
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_cachert")).args(["experiment", "--replot"]).arg(&dir.0).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("results.csv:2:19: expected the HDR-FLIP (a finite number), found \"zero\""), "{err}");
+    assert!(err.contains("results.csv:2:36: expected flip (a number), found \"zero\""), "{err}");
     assert_eq!(dir.entries(), ["results.csv"], "nothing drawn");
 }

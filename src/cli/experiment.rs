@@ -1,14 +1,14 @@
 //! `cachert experiment`: a placement sweep (scenes × budgets × placements × seeds) against the per-sample
-//! reference, written to CSV/JSON with a table of averages — from flags, or from a TOML spec file
-//! (`cachert experiment SPEC.toml --out DIR`: resumable, locked, with `--emit-jobs` and `--collect` for
-//! running the renders elsewhere).
+//! reference, written to CSV/JSON with tables, charts and a report — from a TOML spec file (`cachert
+//! experiment SPEC.toml --out DIR`: resumable, locked, with `--emit-jobs` and `--collect` for running the
+//! renders elsewhere), or from flags, which build the same spec and run it the same way.
 
-use std::path::PathBuf;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
 
 use crate::application::registry;
 use crate::error::{Error, Result};
-use crate::experiment::{Sweep, run as run_sweep};
-use crate::integrator::cache::Placement;
+use crate::experiment::spec::{AppSpec, SceneSpec, SpecFile, Value};
 
 /// Flags of `cachert experiment`.
 #[derive(clap::Args, Debug, Clone)]
@@ -56,8 +56,8 @@ pub struct ExperimentArgs {
     /// the same reference.
     #[arg(long = "baseline-samples", visible_alias = "ao-samples", conflicts_with = "spec")]
     pub baseline_samples: Option<String>,
-    /// Render nothing: redraw the error-against-time charts of a finished flag-form sweep in folder DIR from
-    /// its results.csv (to bring a change to the charts to results already measured).
+    /// Render nothing: rebuild tables.md and the charts of a finished sweep in folder DIR from its
+    /// results.csv alone (to bring a change to the tables or charts to results already measured).
     #[arg(long, value_name = "DIR", conflicts_with_all = [
         "spec", "scenes", "resolution", "integrator", "caches", "placements", "seeds", "set", "out", "nthreads",
         "baseline_samples",
@@ -68,34 +68,47 @@ pub struct ExperimentArgs {
 /// Runs the sweep and returns the table.
 pub fn run(a: &ExperimentArgs) -> Result<String> {
     if let Some(dir) = &a.replot {
-        let written = crate::experiment::replot::replot(dir)?;
-        return Ok(written.iter().map(|p| format!("redrawn: {} (and .png)\n", p.display())).collect());
+        let written = crate::experiment::results::rebuild(dir, &mut |line| eprintln!("{line}"))?;
+        return Ok(written.iter().map(|p| format!("rebuilt: {}\n", p.display())).collect());
     }
     if let Some(path) = &a.spec {
         return run_spec(a, path);
     }
+    let spec = crate::experiment::spec::expand(&from_flags(a)?, Path::new(FLAGS), &|_, msg| {
+        Error::usage(format!("experiment: {msg}"))
+    })?;
+    let (_, table) = crate::experiment::jobs::run(&spec, &a.out, a.nthreads, &mut |line| eprintln!("{line}"))?;
+    Ok(format!("{table}\nresults: {}/results.csv, results.json, tables.md, report.html", a.out.display()))
+}
+
+/// The name a spec built from flags goes by (in the report's title).
+const FLAGS: &str = "(from flags)";
+
+/// The spec the flags describe: one application over the scenes.
+fn from_flags(a: &ExperimentArgs) -> Result<SpecFile> {
     let caches = counts("--caches", &a.caches)?;
-    let baseline_samples = match &a.baseline_samples {
-        Some(list) => counts("--ao-samples", list)?.into_iter().map(|n| n.min(u32::MAX as usize) as u32).collect(),
+    let baselines = match &a.baseline_samples {
+        Some(list) => {
+            counts("--baseline-samples", list)?.into_iter().map(|n| n.min(u32::MAX as usize) as u32).collect()
+        }
         None => Vec::new(),
     };
-    let set = a.set.clone();
-    let placements = a.placements.split(',').map(|s| Placement::parse(s.trim())).collect::<Result<Vec<_>>>()?;
     let default = registry::APPLICATIONS.first().map_or("", |e| e.name);
-    let sweep = Sweep {
-        integrator: a.integrator.clone().unwrap_or_else(|| default.to_string()),
-        scenes: a.scenes.clone(),
+    let set: BTreeMap<String, Value> = a.set.iter().map(|(k, v)| (k.clone(), Value::Text(v.clone()))).collect();
+    let scene = a.scenes.iter().map(|p| SceneSpec { file: p.display().to_string(), name: None }).collect();
+    Ok(SpecFile {
         resolution: a.resolution,
-        caches,
-        placements,
-        seeds: a.seeds.max(1),
-        set,
-        out: a.out.clone(),
-        threads: a.nthreads,
-        baseline_samples,
-    };
-    let (_, table) = run_sweep(&sweep, &mut |line| eprintln!("{line}"))?;
-    Ok(format!("{table}\nresults: {}/results.csv, results.json", a.out.display()))
+        seeds: a.seeds,
+        scene,
+        application: vec![AppSpec {
+            name: a.integrator.clone().unwrap_or_else(|| default.to_string()),
+            placements: a.placements.split(',').map(|p| p.trim().to_string()).collect(),
+            caches: Some(caches),
+            set,
+            baselines,
+            ..Default::default()
+        }],
+    })
 }
 
 /// A comma-separated list of positive counts.
@@ -116,9 +129,18 @@ fn run_spec(a: &ExperimentArgs, path: &std::path::Path) -> Result<String> {
     let spec = crate::experiment::spec::read(path)?;
     if let Some(file) = &a.emit_jobs {
         let exe = std::env::current_exe().map(|p| p.display().to_string()).unwrap_or_else(|_| "cachert".to_string());
-        let n = crate::experiment::jobs::emit(&spec, &a.out, file, &exe)?;
+        let (n, left) = crate::experiment::jobs::emit(&spec, &a.out, file, &exe)?;
+        let left = if left == 0 {
+            String::new()
+        } else {
+            format!(
+                " ({left} baseline jobs render only in this process: cachert experiment {} --out {} runs them and collects)",
+                path.display(),
+                a.out.display()
+            )
+        };
         return Ok(format!(
-            "wrote {n} jobs of {} to {}; run them (e.g. parallel -j 2 < {}), then: cachert experiment {} --out {} --collect",
+            "wrote {n} jobs of {} to {}; run them (e.g. parallel -j 2 < {}), then: cachert experiment {} --out {} --collect{left}",
             spec.jobs.len(),
             file.display(),
             file.display(),

@@ -14,8 +14,26 @@ use std::sync::OnceLock;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::Row;
 use crate::error::{Error, Result};
+
+/// One measured run as a chart draws it: a point of a series before the mean over seeds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Row {
+    /// The chart's name (the scene, or scene and application).
+    pub scene: String,
+    /// The series: a placement, or a per-pixel method `LABEL:N` (one series over N).
+    pub placement: String,
+    /// Budget (0 for a per-pixel run).
+    pub caches: usize,
+    /// Seed.
+    pub seed: u64,
+    /// RMSE against the reference.
+    pub rmse: f64,
+    /// Mean HDR-FLIP against the reference.
+    pub flip: f64,
+    /// Wall seconds of the run.
+    pub secs: f64,
+}
 
 /// Colours of the series, in order of first appearance (the charts of `cli` use them too).
 pub const PALETTE: [RGBColor; 10] = [
@@ -144,7 +162,7 @@ pub fn series(rows: &[Row], scene: &str) -> Vec<(String, Vec<Point>)> {
             let values: Vec<(f64, f64, f64)> = mine
                 .iter()
                 .filter(|r| r.caches == caches && r.placement == placement)
-                .map(|r| (r.rmse, r.flip, r.stats.times.total))
+                .map(|r| (r.rmse, r.flip, r.secs))
                 .collect();
             points.push(Point::of(caches, &values));
         }
@@ -319,7 +337,6 @@ fn draw<DB: DrawingBackend>(plot: &Plot, root: &DrawingArea<DB, Shift>) -> std::
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::integrator::cache::stats::{CacheStats, StageTimes};
 
     #[test]
     fn log_axes_label_every_decade_they_span() {
@@ -349,17 +366,7 @@ mod tests {
     }
 
     fn row(placement: &str, caches: usize, seed: u64, rmse: f64, secs: f64) -> Row {
-        let times = StageTimes { total: secs, ..Default::default() };
-        Row {
-            scene: "s".into(),
-            placement: placement.into(),
-            caches,
-            seed,
-            rmse,
-            flip: rmse / 10.0,
-            converged: None,
-            stats: CacheStats { times, ..Default::default() },
-        }
+        Row { scene: "s".into(), placement: placement.into(), caches, seed, rmse, flip: rmse / 10.0, secs }
     }
 
     #[test]

@@ -8,12 +8,11 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use super::Row;
-use super::chart::{self, Plot, Point, XAxis};
+use super::chart::{self, Plot, Point, Row, XAxis};
 use super::jobs::Record;
+use super::spec::CONVERGED;
 use super::summary::{ok, pairs, total, varied_one};
 use crate::error::Result;
-use crate::integrator::cache::stats::{CacheStats, StageTimes};
 
 /// A chart's file and what it shows.
 #[derive(Clone, Debug, PartialEq)]
@@ -38,7 +37,8 @@ pub fn write(records: &[Record], out: &Path, log: &mut dyn FnMut(&str)) -> Resul
     for (scene, app) in pairs(records) {
         let label = format!("{scene}-{app}");
         let rows: Vec<Row> = ok(records)
-            .filter(|r| r.scene == scene && r.application == app && r.varied.is_empty())
+            // The converged per-pixel image (64 × 64 samples) is a second reference, not a method.
+            .filter(|r| r.scene == scene && r.application == app && r.varied.is_empty() && r.method != CONVERGED)
             .map(|r| Row {
                 scene: label.clone(),
                 placement: r.method.clone(),
@@ -46,8 +46,7 @@ pub fn write(records: &[Record], out: &Path, log: &mut dyn FnMut(&str)) -> Resul
                 seed: r.seed,
                 rmse: r.rmse,
                 flip: r.flip,
-                converged: None,
-                stats: CacheStats { times: StageTimes { total: total(r), ..Default::default() }, ..Default::default() },
+                secs: total(r),
             })
             .collect();
         let figure =

@@ -19,13 +19,12 @@ use serde::Serialize;
 use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::integrator::RenderSettings;
-use crate::integrator::cache::stats::StageTimes;
 use crate::integrator::cache::{CacheOverrides, Placement};
 use crate::job::{Outputs, RenderJob};
 use crate::metrics::{Metric, compare};
 use crate::scene::LoadOptions;
 
-use super::spec::{Job, Spec};
+use super::spec::{BaselineRun, Job, Spec};
 
 /// The folder of per-run files inside an experiment's output folder.
 pub const RUNS: &str = "runs";
@@ -49,7 +48,7 @@ pub fn render_job(job: &Job, out: &Path, threads: Option<usize>) -> Result<Rende
         (job.seed == 0 && placement != Placement::Reference).then(|| runs.join(format!("{}{OVERLAY}", job.id)));
     Ok(RenderJob {
         scene: job.file.clone(),
-        load: LoadOptions { quick: false, resolution: Some(job.resolution) },
+        load: LoadOptions { quick: false, resolution: job.resolution },
         settings: RenderSettings {
             seed: job.seed,
             threads,
@@ -150,29 +149,38 @@ pub fn lock(out: &Path) -> Result<Lock> {
 }
 
 /// Writes every job of `spec` not yet done in `out` as a command line of `exe` to `path`, one per line;
-/// returns how many. The jobs are independent: a scheduler may run them in any order, on any machine that
-/// sees the same paths.
-pub fn emit(spec: &Spec, out: &Path, path: &Path, exe: &str) -> Result<usize> {
+/// returns how many, and how many baseline jobs not yet done were left out (they render only in the
+/// sweep's own process, [`run`]). The jobs are independent: a scheduler may run them in any order, on any
+/// machine that sees the same paths.
+pub fn emit(spec: &Spec, out: &Path, path: &Path, exe: &str) -> Result<(usize, usize)> {
     std::fs::create_dir_all(out.join(RUNS)).map_err(|e| Error::file(out, format!("cannot create: {e}")))?;
+    let todo: Vec<&Job> = spec.jobs.iter().filter(|j| !done(j, out)).collect();
     let lines: Vec<String> =
-        spec.jobs.iter().filter(|j| !done(j, out)).map(|j| command_line(j, out, exe)).collect::<Result<_>>()?;
+        todo.iter().filter(|j| j.baseline.is_none()).map(|j| command_line(j, out, exe)).collect::<Result<_>>()?;
     let text: String = lines.iter().map(|l| format!("{l}\n")).collect();
     crate::image::write_bytes(path, text.as_bytes())?;
-    Ok(lines.len())
+    Ok((lines.len(), todo.len() - lines.len()))
 }
 
-/// Runs `job` in this process (the same render its command line makes), writing its warnings (or its
-/// error) to `runs/<id>.log`; returns the error message of a failed run.
+/// Runs `job` in this process (the same render its command line makes; a baseline job as
+/// [`super::per_pixel`] renders it), writing its warnings (or its error) to `runs/<id>.log`; returns the
+/// error message of a failed run.
 fn run_one(job: &Job, out: &Path, threads: Option<usize>) -> std::result::Result<(), String> {
     let mut log = String::new();
-    let result = render_job(job, out, threads).and_then(|j| {
-        j.run(&mut |w| {
-            for w in w.iter() {
-                let _ = writeln!(log, "{w}");
-            }
-        })
-    });
-    let result = result.map(|_| ()).map_err(|e| e.to_string());
+    let result = if job.baseline.is_some() {
+        super::per_pixel::run(job, out, threads)
+    } else {
+        render_job(job, out, threads)
+            .and_then(|j| {
+                j.run(&mut |w| {
+                    for w in w.iter() {
+                        let _ = writeln!(log, "{w}");
+                    }
+                })
+            })
+            .map(|_| ())
+    };
+    let result = result.map_err(|e| e.to_string());
     if let Err(e) = &result {
         let _ = writeln!(log, "error: {e}");
     }
@@ -233,12 +241,12 @@ pub struct Record {
     pub method: String,
     /// The sample count of a per-pixel run.
     pub samples: Option<u32>,
-    /// Budget (0 for a per-pixel run).
+    /// Budget (0 for a per-pixel run or a baseline).
     pub caches: usize,
     /// Seed.
     pub seed: u64,
-    /// Film resolution.
-    pub resolution: [u32; 2],
+    /// Film resolution (the reference's when the spec leaves it to the scene; `None` when unknown).
+    pub resolution: Option<[u32; 2]>,
     /// The varied parameters, `k=v;…`.
     pub varied: String,
     /// Every `--set` pair, `k=v;…`.
@@ -247,6 +255,10 @@ pub struct Record {
     pub rmse: f64,
     /// Mean HDR-FLIP against the reference.
     pub flip: f64,
+    /// RMSE against the converged per-pixel image (a spec with `baselines`: seed-0 runs and the baselines).
+    pub rmse_converged: Option<f64>,
+    /// Mean HDR-FLIP against the converged per-pixel image.
+    pub flip_converged: Option<f64>,
     /// Stage times in seconds, by the names of the `--stats` report (`total` included).
     pub times: BTreeMap<String, f64>,
     /// Stage-1 and stage-2 caches placed.
@@ -284,13 +296,15 @@ fn record(job: &Job, status: &str, error: String) -> Record {
         placement: job.placement.clone(),
         method: job.method(),
         samples: job.samples,
-        caches: if job.samples.is_some() { 0 } else { job.caches },
+        caches: if job.samples.is_some() || job.baseline.is_some() { 0 } else { job.caches },
         seed: job.seed,
         resolution: job.resolution,
         varied: job.varied.clone(),
         set: job.set.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(";"),
         rmse: f64::NAN,
         flip: f64::NAN,
+        rmse_converged: None,
+        flip_converged: None,
         times: BTreeMap::new(),
         caches_placed: [0, 0],
         rays: [0, 0],
@@ -314,13 +328,69 @@ fn fill(r: &mut Record, stats: &serde_json::Value) {
     r.sigma_a_deg = s["placement"]["sigma_a_deg"].as_f64();
 }
 
+/// A reference image and its seconds, or why there is none.
+type Reference = std::result::Result<(Image, f64), String>;
+
+/// The images every run is measured against: per reference id, the reference and, with `baselines`, the
+/// converged per-pixel image.
+struct References<'a> {
+    per_sample: BTreeMap<&'a str, Reference>,
+    converged: BTreeMap<&'a str, Image>,
+}
+
+impl References<'_> {
+    /// Measures `img` against `job`'s reference (and, at seed 0, its converged image) into `r`.
+    fn measure(&self, r: &mut Record, job: &Job, img: Result<Image>) {
+        let img = match (img, self.per_sample.get(job.reference.as_str())) {
+            (_, None) => return (r.status, r.error) = ("failed".into(), "no reference job".into()),
+            (_, Some(Err(e))) => return (r.status, r.error) = ("failed".into(), format!("its reference: {e}")),
+            (Err(e), _) => return (r.status, r.error) = ("failed".into(), e.to_string()),
+            (Ok(img), Some(Ok((reference, secs)))) => {
+                r.reference_s = *secs;
+                r.resolution = Some([reference.width as u32, reference.height as u32]);
+                match compare(&img, reference, &[Metric::Rmse, Metric::Flip]) {
+                    Ok(m) => (r.rmse, r.flip) = (m[0].1, m[1].1),
+                    Err(e) => return (r.status, r.error) = ("failed".into(), e.to_string()),
+                }
+                img
+            }
+        };
+        if let Some(conv) = self.converged.get(job.reference.as_str())
+            && job.seed == 0
+            && job.baseline != Some(BaselineRun::Converged)
+            && let Ok(m) = compare(&img, conv, &[Metric::Rmse, Metric::Flip])
+        {
+            (r.rmse_converged, r.flip_converged) = (Some(m[0].1), Some(m[1].1));
+        }
+    }
+}
+
+/// The records of a baseline job: one per baseline its `.json` lists (`LABEL:N`, or `converged`).
+fn baseline_records(job: &Job, stats: &serde_json::Value, runs: &Path, refs: &References) -> Vec<Record> {
+    let mut out = Vec::new();
+    for b in stats["baselines"].as_array().into_iter().flatten() {
+        let label = b["label"].as_str().unwrap_or("baseline");
+        let mut r = record(job, "ok", String::new());
+        if let Some(BaselineRun::Rays(n)) = job.baseline {
+            r.id = format!("{}-{label}", job.id);
+            r.method = format!("{label}:{n}");
+        }
+        let secs = b["seconds"].as_f64().unwrap_or(f64::NAN);
+        r.times = [("render".to_string(), secs), ("total".to_string(), secs)].into_iter().collect();
+        let img = crate::image::read(&runs.join(super::per_pixel::image_name(job, label)));
+        refs.measure(&mut r, job, img);
+        out.push(r);
+    }
+    out
+}
+
 /// Measures every run of `spec` found in `out` against its reference and writes `results.csv`,
 /// `results.json`, `tables.md`, the charts and `report.html`; returns the records and the first table (which
 /// method wins where). Runs that failed or are
 /// missing (or whose reference is) are rows with their status and message.
 pub fn collect(spec: &Spec, out: &Path, log: &mut dyn FnMut(&str)) -> Result<(Vec<Record>, String)> {
     let runs = out.join(RUNS);
-    let mut references: BTreeMap<&str, std::result::Result<(Image, f64), String>> = BTreeMap::new();
+    let mut refs = References { per_sample: BTreeMap::new(), converged: BTreeMap::new() };
     for job in spec.jobs.iter().filter(|j| j.is_reference()) {
         let got = match read_json(&runs.join(format!("{}.json", job.id))) {
             Some(stats) => crate::image::read(&runs.join(format!("{}.exr", job.id)))
@@ -328,7 +398,12 @@ pub fn collect(spec: &Spec, out: &Path, log: &mut dyn FnMut(&str)) -> Result<(Ve
                 .map_err(|e| e.to_string()),
             None => Err(failure(out, job).unwrap_or_else(|| "not run".into())),
         };
-        references.insert(job.id.as_str(), got);
+        refs.per_sample.insert(job.id.as_str(), got);
+    }
+    for job in spec.jobs.iter().filter(|j| j.baseline == Some(BaselineRun::Converged) && done(j, out)) {
+        if let Ok(img) = crate::image::read(&runs.join(format!("{}.exr", job.id))) {
+            refs.converged.insert(job.reference.as_str(), img);
+        }
     }
     let mut records = Vec::new();
     for job in spec.jobs.iter().filter(|j| !j.is_reference()) {
@@ -338,102 +413,38 @@ pub fn collect(spec: &Spec, out: &Path, log: &mut dyn FnMut(&str)) -> Result<(Ve
             (None, Some(e)) => record(job, "failed", e),
             (None, None) => record(job, "missing", "not run (or interrupted)".into()),
         };
-        if let Some(s) = &stats {
-            fill(&mut r, s);
-            match references.get(job.reference.as_str()) {
-                Some(Ok((reference, secs))) => {
-                    r.reference_s = *secs;
-                    let measured = crate::image::read(&runs.join(format!("{}.exr", job.id)))
-                        .and_then(|img| compare(&img, reference, &[Metric::Rmse, Metric::Flip]));
-                    match measured {
-                        Ok(m) => (r.rmse, r.flip) = (m[0].1, m[1].1),
-                        Err(e) => (r.status, r.error) = ("failed".into(), e.to_string()),
-                    }
-                }
-                Some(Err(e)) => (r.status, r.error) = ("failed".into(), format!("its reference: {e}")),
-                None => (r.status, r.error) = ("failed".into(), "no reference job".into()),
+        match &stats {
+            Some(s) if job.baseline.is_some() => {
+                records.extend(baseline_records(job, s, &runs, &refs));
+                continue;
             }
+            Some(s) => {
+                fill(&mut r, s);
+                refs.measure(&mut r, job, crate::image::read(&runs.join(format!("{}.exr", job.id))));
+            }
+            None => {}
         }
         records.push(r);
     }
     let failed = records.iter().filter(|r| r.status != "ok").count();
     log(&format!("collected {} runs ({} ok, {failed} failed or missing)", records.len(), records.len() - failed));
-    write_csv(&records, &out.join("results.csv"))?;
+    super::results::write_csv(&records, &out.join(super::results::CSV))?;
     let json =
         serde_json::to_string_pretty(&records).map_err(|e| Error::file(out, format!("cannot encode results: {e}")))?;
     crate::image::write_bytes(&out.join("results.json"), json.as_bytes())?;
     let figures = super::figures::write(&records, out, log)?;
     let tables = super::tables::all(&records);
-    let markdown: String = tables.iter().map(|t| t.markdown()).collect();
-    crate::image::write_bytes(&out.join(TABLES), markdown.as_bytes())?;
+    super::results::write_tables(&tables, &out.join(TABLES))?;
     let report = super::report::write(spec, &records, &tables, &figures, out)?;
     log(&format!(
         "wrote {}, {TABLES}, {} charts and {}",
-        out.join("results.csv").display(),
+        out.join(super::results::CSV).display(),
         figures.len(),
         report.display()
     ));
     // What the command prints: the claims table, the one to read first.
     let summary = tables.first().map_or_else(String::new, |t| t.markdown());
     Ok((records, summary))
-}
-
-/// A CSV field: quoted when it holds a comma, a quote or a line break.
-fn field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) { format!("\"{}\"", s.replace('"', "\"\"")) } else { s.to_string() }
-}
-
-fn write_csv(records: &[Record], path: &Path) -> Result<()> {
-    let steps: Vec<String> = records.iter().find(|r| !r.times.is_empty()).map_or_else(
-        || StageTimes::default().steps().iter().map(|(n, _)| n.replace([' ', '-'], "_")).collect(),
-        |r| r.times.keys().cloned().collect(),
-    );
-    let mut csv = String::from(
-        "id,status,error,scene,application,placement,method,samples,caches,seed,width,height,varied,set,rmse,flip,",
-    );
-    for s in &steps {
-        let _ = write!(csv, "{s}_s,");
-    }
-    csv.push_str("stage1,stage2,cache_rays,render_rays,peak_memory_bytes,record_bytes,sigma_a_deg,reference_s\n");
-    let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x}"));
-    for r in records {
-        let _ = write!(
-            csv,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.6},{:.6},",
-            field(&r.id),
-            r.status,
-            field(&r.error),
-            field(&r.scene),
-            r.application,
-            r.placement,
-            field(&r.method),
-            r.samples.map_or(String::new(), |n| n.to_string()),
-            r.caches,
-            r.seed,
-            r.resolution[0],
-            r.resolution[1],
-            field(&r.varied),
-            field(&r.set),
-            r.rmse,
-            r.flip
-        );
-        for s in &steps {
-            let _ = write!(csv, "{},", opt(r.times.get(s).copied()));
-        }
-        let _ = writeln!(
-            csv,
-            "{},{},{},{},{},{},{},{}",
-            r.caches_placed[0],
-            r.caches_placed[1],
-            r.rays[0],
-            r.rays[1],
-            r.peak_memory_bytes.map_or(String::new(), |b| b.to_string()),
-            r.record_bytes,
-            opt(r.sigma_a_deg),
-            opt(Some(r.reference_s).filter(|s| s.is_finite()))
-        );
-    }
-    crate::image::write_bytes(path, csv.as_bytes())
 }
 
 #[cfg(test)]
@@ -446,8 +457,6 @@ mod tests {
         assert_eq!(quote("a b"), "'a b'");
         assert_eq!(quote("it's"), "'it'\\''s'");
         assert_eq!(quote(""), "''");
-        assert_eq!(field("a,b"), "\"a,b\"");
-        assert_eq!(field("say \"x\""), "\"say \"\"x\"\"\"");
     }
 
     #[test]

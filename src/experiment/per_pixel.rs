@@ -1,27 +1,28 @@
 //! Experiments: the per-pixel side of "caching exists to be faster than per-pixel rendering at equal
-//! quality". Renders the application's per-pixel baseline (`Application::baseline`: for AO pbrt-v3's
-//! `ambientocclusion` with the cache runs' ray length, divided by π) with a box filter (what the cache
-//! driver's sub-pixel shading does): once converged (64 pixel samples × 64 rays, so the pixel footprint is
-//! integrated too — four sub-pixel samples at other positions than the reference's differ at every edge
-//! however many rays they trace), and at several ray counts with four pixel samples, each measured against
-//! the converged image and against the per-sample reference.
+//! quality" — the jobs of a spec's `baselines`. Renders the application's per-pixel baselines
+//! (`Application::baselines`: for AO pbrt-v3's `ambientocclusion` with the cache runs' ray length, divided
+//! by π) with a box filter (what the cache driver's sub-pixel shading does): the first once converged (64
+//! pixel samples × 64 rays, so the pixel footprint is integrated too — four sub-pixel samples at other
+//! positions than the reference's differ at every edge however many rays they trace), and each at several
+//! ray counts with four pixel samples. `jobs::collect` measures them against the converged image and
+//! against the per-sample reference.
 //!
-//! Depends on `scene`, `render`, `application` (the registry), `image` and `metrics`; only `experiment`
-//! uses it.
+//! Depends on `scene`, `integrator`, `application` (the registry) and `image`; only `experiment` uses it.
+
+use std::path::Path;
 
 use crate::application::registry::{self, WithApplication};
 use crate::application::{Application, Baseline};
 use crate::error::{Error, Result, Warnings};
 use crate::image::Image;
-use crate::integrator::cache::stats::{CacheStats, StageTimes};
 use crate::integrator::{RenderSettings, render};
-use crate::metrics::{Metric, compare};
 use crate::parse::integrator::IntegratorParams;
 use crate::parse::{Named, ParamList};
 use crate::scene::filter::{FilterKind, FilterSpec};
-use crate::scene::{LoadedScene, Scene};
+use crate::scene::{LoadOptions, LoadedScene, Scene};
 
-use super::{Row, Sweep};
+use super::jobs::RUNS;
+use super::spec::{BaselineRun, Job};
 
 /// Pixel samples of the per-pixel renders: the cache driver's default sub-pixel count.
 const PIXEL_SAMPLES: u32 = 4;
@@ -46,86 +47,66 @@ impl WithApplication for BaselineOf<'_> {
     }
 }
 
-/// The per-pixel baselines of the sweep's integrator (never empty: an error when it has none).
-pub(super) fn baselines(l: &LoadedScene, sweep: &Sweep) -> Result<Vec<Baseline>> {
-    let of = BaselineOf { scene: &l.scene, integrator: l.integrator.as_ref(), set: &sweep.set };
-    let all = registry::dispatch(&sweep.integrator, of).transpose()?.unwrap_or_default();
+/// The per-pixel baselines of `app` with the parameters `set` (never empty: an error when it has none).
+fn baselines(l: &LoadedScene, app: &str, set: &[(String, String)]) -> Result<Vec<Baseline>> {
+    let of = BaselineOf { scene: &l.scene, integrator: l.integrator.as_ref(), set };
+    let all = registry::dispatch(app, of).transpose()?.unwrap_or_default();
     if all.is_empty() {
-        return Err(Error::usage(format!(
-            "experiment: \"{}\" has no per-pixel baseline to compare with",
-            sweep.integrator
-        )));
+        return Err(Error::usage(format!("experiment: \"{app}\" has no per-pixel baseline to compare with")));
     }
     Ok(all)
 }
 
-/// RMSE and mean HDR-FLIP of `img` against `reference`.
-pub(super) fn measure(img: &Image, reference: &Image) -> Result<(f64, f64)> {
-    let m = compare(img, reference, &[Metric::Rmse, Metric::Flip])?;
-    Ok((m[0].1, m[1].1))
+/// The image file of baseline `label` in a baseline job's run (`runs/<id>-<label>.exr`); the converged
+/// image is the job's own `runs/<id>.exr`.
+pub(super) fn image_name(job: &Job, label: &str) -> String {
+    match job.baseline {
+        Some(BaselineRun::Rays(_)) => format!("{}-{label}.exr", job.id),
+        _ => format!("{}.exr", job.id),
+    }
 }
 
-/// The converged per-pixel image of the scene, kept in the output folder as `STORED-converged.exr` and reused
-/// (`stored`: the scene's name with the tag of the sweep's integrator and parameters).
-pub(super) fn converged(
-    l: &mut LoadedScene,
-    sweep: &Sweep,
-    base: &Baseline,
-    stored: &str,
-    log: &mut dyn FnMut(&str),
-) -> Result<Image> {
-    let path = sweep.out.join(format!("{stored}-converged.exr"));
-    if let Ok(img) = crate::image::read(&path)
-        && [img.width, img.height] == l.scene.film.cropped_bounds().size()
-    {
-        return Ok(img);
+/// Renders a baseline job (`job.baseline` is set) into `out/runs/`: its images, then `runs/<id>.json`
+/// listing each baseline's label, integrator and render seconds (written last: the job's "done" mark).
+pub(super) fn run(job: &Job, out: &Path, threads: Option<usize>) -> Result<()> {
+    let Some(kind) = job.baseline else {
+        return Err(Error::usage(format!("experiment: job \"{}\" is not a baseline job", job.id)));
+    };
+    let mut l = crate::scene::load(&job.file, LoadOptions { resolution: job.resolution, ..Default::default() })?;
+    let bases = baselines(&l, &job.application, &job.set)?;
+    let (chosen, spp, rays): (&[Baseline], u32, Option<u32>) = match kind {
+        BaselineRun::Converged => (&bases[..1], CONVERGED.0, None),
+        BaselineRun::Rays(n) => (&bases[..], PIXEL_SAMPLES, Some(n)),
+    };
+    let runs = out.join(RUNS);
+    let mut done = Vec::new();
+    for base in chosen {
+        let n = rays.unwrap_or(CONVERGED.1);
+        let (img, secs) = per_pixel(&mut l, threads, base, spp, n)?;
+        let name = image_name(job, base.label);
+        crate::image::write(&img, &runs.join(&name))?;
+        done.push(serde_json::json!({
+            "label": base.label,
+            "integrator": base.integrator,
+            "pixel_samples": spp,
+            "samples": n,
+            "seconds": secs,
+            "image": name,
+        }));
     }
-    let (img, secs) = per_pixel(l, sweep, base, CONVERGED.0, CONVERGED.1)?;
-    log(&format!("{stored}: converged per-pixel image ({} spp x {} rays) in {secs:.1} s", CONVERGED.0, CONVERGED.1));
-    crate::image::write(&img, &path)?;
-    Ok(img)
-}
-
-/// One row per baseline and entry of `sweep.baseline_samples` (rays per pixel sample, four pixel samples):
-/// placement `LABEL:N` (`ao:N`, `power:N`), budget 0, seed 0; `rmse`/`flip` against `reference`,
-/// `converged` against `conv`.
-pub(super) fn rows(
-    l: &mut LoadedScene,
-    sweep: &Sweep,
-    bases: &[Baseline],
-    name: &str,
-    (reference, conv): (&Image, &Image),
-    log: &mut dyn FnMut(&str),
-) -> Result<Vec<Row>> {
-    let mut out = Vec::new();
-    for base in bases {
-        for &n in &sweep.baseline_samples {
-            let (img, secs) = per_pixel(l, sweep, base, PIXEL_SAMPLES, n)?;
-            let (rmse, flip) = measure(&img, reference)?;
-            let against = measure(&img, conv)?;
-            log(&format!(
-                "{name} {}:{n} ({} {}={n} x {PIXEL_SAMPLES} spp): rmse {rmse:.5} flip {flip:.5}, against the \
-                 converged image rmse {:.5} flip {:.5} ({secs:.1} s)",
-                base.label, base.integrator, base.samples, against.0, against.1
-            ));
-            let times = StageTimes { render: secs, total: secs, ..Default::default() };
-            let (scene, placement) = (name.to_string(), format!("{}:{n}", base.label));
-            let stats = CacheStats { times, ..Default::default() };
-            out.push(Row { scene, placement, caches: 0, seed: 0, rmse, flip, converged: Some(against), stats });
-        }
-    }
-    Ok(out)
+    let json = serde_json::json!({ "baselines": done });
+    crate::image::write_bytes(&runs.join(format!("{}.json", job.id)), json.to_string().as_bytes())
 }
 
 /// The baseline with `spp` pixel samples of `n` rays, box-filtered, scaled to the application's units; and
 /// its wall seconds.
-fn per_pixel(l: &mut LoadedScene, sweep: &Sweep, base: &Baseline, spp: u32, n: u32) -> Result<(Image, f64)> {
+fn per_pixel(l: &mut LoadedScene, threads: Option<usize>, base: &Baseline, spp: u32, n: u32) -> Result<(Image, f64)> {
     let mut set = vec![(base.samples.to_string(), n.to_string())];
     set.extend(base.set.iter().cloned());
     let settings = RenderSettings {
         seed: 0,
         spp: Some(spp),
-        threads: sweep.threads,
+        threads,
         integrator: Some(base.integrator.into()),
         set,
         ..Default::default()

@@ -1,8 +1,10 @@
 //! A sweep described in a TOML file (`cachert experiment SPEC.toml`): scenes × applications × placements ×
-//! cache budgets × parameter values × seeds at one resolution, expanded into independent [`Job`]s.
+//! cache budgets × parameter values × seeds at one resolution, expanded into independent [`Job`]s. The flag
+//! form (`cachert experiment --scene … --caches …`) builds the same [`SpecFile`] from its flags and runs it
+//! the same way: one set of jobs, one `results.csv` schema, one table writer.
 //!
 //! ```toml
-//! resolution = [160, 90]
+//! resolution = [160, 90]         # optional: default each scene's own (then caches, not density)
 //! seeds = 3
 //!
 //! [[scene]]
@@ -17,7 +19,17 @@
 //! vary = { sdminsize = [1, 10, 100] }   # swept: every combination, with every placement
 //! scenes = ["sibenik"]           # optional: only these scenes (default: all)
 //! per_pixel = [1, 2, 4]          # optional: the application's own estimator per pixel at these counts
+//! baselines = [4, 16, 64]        # optional: the application's per-pixel baselines (see below)
 //! ```
+//!
+//! `baselines` (the flag form's `--baseline-samples`) renders, once per reference and at seed 0, each of the
+//! application's per-pixel baselines (`Application::baselines`: pbrt-v3's `ambientocclusion` for AO, power
+//! and uniform VPL sampling for importance caching) at N rays (or draws) per pixel sample × 4 pixel samples,
+//! box-filtered — rows `ao:N`, `power:N`, `uniform:N` — and the first baseline converged (64 × 64, row
+//! `converged`). Every baseline row and every seed-0 run is also measured against that converged image
+//! (columns `rmse_converged`, `flip_converged`). These jobs render in the sweep's own process only (not
+//! with `--emit-jobs`). `per_pixel`, by contrast, runs the application's own estimator, so it converges to
+//! the reference by construction.
 //!
 //! Depends on the application and placement registries (names, paper budgets) and on `toml`; it renders
 //! nothing.
@@ -59,43 +71,71 @@ impl Value {
 }
 
 /// One `[[scene]]`.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct SceneSpec {
-    file: String,
-    name: Option<String>,
+pub struct SceneSpec {
+    /// The scene file, relative to the spec's folder (or absolute).
+    pub file: String,
+    /// Its name in tables and charts (default: the folder and the file stem, `dir-stem`).
+    pub name: Option<String>,
 }
 
 /// One `[[application]]`.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct AppSpec {
-    name: String,
-    placements: Vec<String>,
-    caches: Option<Vec<usize>>,
-    density: Option<Vec<f64>>,
+pub struct AppSpec {
+    /// A cache-based integrator of the application registry.
+    pub name: String,
+    /// Placement names (never `none`: every sweep has the reference).
+    pub placements: Vec<String>,
+    /// Budgets (or `density`).
+    pub caches: Option<Vec<usize>>,
+    /// Factors of the paper's density (or `caches`).
+    pub density: Option<Vec<f64>>,
+    /// Parameters of every run and of the reference.
     #[serde(default)]
-    set: BTreeMap<String, Value>,
+    pub set: BTreeMap<String, Value>,
+    /// Parameters swept: every combination, with every placement.
     #[serde(default)]
-    vary: BTreeMap<String, Vec<Value>>,
-    scenes: Option<Vec<String>>,
+    pub vary: BTreeMap<String, Vec<Value>>,
+    /// Only these scenes (default: all).
+    pub scenes: Option<Vec<String>>,
+    /// The application's own estimator per pixel at these counts, every seed.
     #[serde(default)]
-    per_pixel: Vec<u32>,
+    pub per_pixel: Vec<u32>,
+    /// The application's per-pixel baselines at these ray (or draw) counts per pixel sample, seed 0, and
+    /// their converged image.
+    #[serde(default)]
+    pub baselines: Vec<u32>,
 }
 
-/// The file as written.
-#[derive(Clone, Debug, Deserialize)]
+/// A spec as data: what a spec file holds, or what the flag form of `cachert experiment` builds.
+#[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct File {
-    resolution: [u32; 2],
+pub struct SpecFile {
+    /// Film resolution of every run; `None`: each scene's own.
+    pub resolution: Option<[u32; 2]>,
+    /// Seeds 0..seeds.
     #[serde(default = "one")]
-    seeds: u64,
-    scene: Vec<SceneSpec>,
-    application: Vec<AppSpec>,
+    pub seeds: u64,
+    /// The scenes.
+    pub scene: Vec<SceneSpec>,
+    /// The applications with their sweeps.
+    pub application: Vec<AppSpec>,
 }
 
 fn one() -> u64 {
     1
+}
+
+/// What a per-pixel baseline job renders (`baselines = [...]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BaselineRun {
+    /// The first baseline converged (64 pixel samples × 64 rays), once per reference: the second
+    /// reference the seed-0 runs are measured against (columns `rmse_converged`, `flip_converged`).
+    Converged,
+    /// Every baseline of the application at N rays (or draws) per pixel sample × 4 pixel samples.
+    Rays(u32),
 }
 
 /// What one job renders: the arguments of one `cachert render` run.
@@ -115,8 +155,8 @@ pub struct Job {
     pub caches: usize,
     /// Seed.
     pub seed: u64,
-    /// Film resolution.
-    pub resolution: [u32; 2],
+    /// Film resolution (`None`: the scene's own).
+    pub resolution: Option<[u32; 2]>,
     /// Every `--set` pair: the application's fixed ones, then the varied ones.
     pub set: Vec<(String, String)>,
     /// The varied pairs alone, `k=v;…` (empty without `vary`).
@@ -125,6 +165,8 @@ pub struct Job {
     pub reference: String,
     /// For a per-pixel run of the application's own estimator (placement `none`): its sample count.
     pub samples: Option<u32>,
+    /// For a run of the application's per-pixel baselines (placement `none`): which.
+    pub baseline: Option<BaselineRun>,
 }
 
 impl Job {
@@ -136,16 +178,25 @@ impl Job {
     /// The label of its method in tables and charts: the placement and the varied parameters, or
     /// `per-pixel:N` for a per-pixel run.
     pub fn method(&self) -> String {
-        match self.samples {
-            Some(n) => format!("{PER_PIXEL}:{n}"),
-            None if self.varied.is_empty() => self.placement.clone(),
-            None => format!("{} {}", self.placement, self.varied.replace(';', " ")),
+        match (self.baseline, self.samples) {
+            (Some(BaselineRun::Converged), _) => CONVERGED.to_string(),
+            (Some(BaselineRun::Rays(n)), _) => format!("{BASELINES}:{n}"),
+            (None, Some(n)) => format!("{PER_PIXEL}:{n}"),
+            (None, None) if self.varied.is_empty() => self.placement.clone(),
+            (None, None) => format!("{} {}", self.placement, self.varied.replace(';', " ")),
         }
     }
 }
 
 /// The method label of per-pixel runs (`per-pixel:N`).
 pub const PER_PIXEL: &str = "per-pixel";
+
+/// The method label of a baseline job before it ran (`baselines:N`); each of its records is labelled by
+/// its baseline (`ao:N`, `power:N`, `uniform:N`).
+pub const BASELINES: &str = "baselines";
+
+/// The method label of the converged per-pixel image.
+pub const CONVERGED: &str = "converged";
 
 /// A parsed spec: its jobs, references first.
 #[derive(Clone, Debug)]
@@ -170,39 +221,41 @@ fn at(path: &Path, text: &str, offset: usize) -> SourceLoc {
 
 /// Parses spec text (paths relative to `path`'s folder).
 pub fn parse(text: &str, path: &Path) -> Result<Spec> {
-    let file: File = toml::from_str(text).map_err(|e| {
+    let file: SpecFile = toml::from_str(text).map_err(|e| {
         let offset = e.span().map_or(0, |s| s.start);
         Error::at(&at(path, text, offset), format!("experiment spec: {}", e.message()))
     })?;
     // Errors about a value: located at its first mention in the file.
     let near = |needle: &str, msg: String| {
         let offset = text.find(needle).unwrap_or(0);
-        Error::at(&at(path, text, offset), msg)
+        Error::at(&at(path, text, offset), format!("experiment spec: {msg}"))
     };
-    if file.resolution.contains(&0) {
-        return Err(near("resolution", "experiment spec: resolution must be two positive integers".into()));
+    expand(&file, path, &near)
+}
+
+/// Expands a spec into its jobs: scene paths relative to `path`'s folder; `near(needle, message)` makes
+/// the error of a bad value (located at `needle` in a spec file; a usage error for the flag form).
+pub fn expand(file: &SpecFile, path: &Path, near: &dyn Fn(&str, String) -> Error) -> Result<Spec> {
+    if file.resolution.is_some_and(|r| r.contains(&0)) {
+        return Err(near("resolution", "resolution must be two positive integers".into()));
     }
     if file.seeds == 0 {
-        return Err(near("seeds", "experiment spec: seeds must be at least 1".into()));
+        return Err(near("seeds", "seeds must be at least 1".into()));
     }
     if file.scene.is_empty() || file.application.is_empty() {
-        return Err(near("", "experiment spec: needs at least one [[scene]] and one [[application]]".into()));
+        return Err(near("", "needs at least one [[scene]] and one [[application]]".into()));
     }
     let dir = path.parent().unwrap_or(Path::new("."));
-    let [w, h] = file.resolution;
     let mut scenes = Vec::new();
     for s in &file.scene {
         let p = Path::new(&s.file);
         let full = if p.is_absolute() { p.to_path_buf() } else { dir.join(p) };
         let name = s.name.clone().unwrap_or_else(|| super::name_of(&full));
         if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c)) {
-            return Err(near(
-                &s.file,
-                format!("experiment spec: scene name \"{name}\" must be letters, digits, - _ ."),
-            ));
+            return Err(near(&s.file, format!("scene name \"{name}\" must be letters, digits, - _ .")));
         }
         if scenes.iter().any(|(n, _)| *n == name) {
-            return Err(near(&s.file, format!("experiment spec: two scenes are named \"{name}\" (set name = …)")));
+            return Err(near(&s.file, format!("two scenes are named \"{name}\" (set name = …)")));
         }
         scenes.push((name, full));
     }
@@ -210,31 +263,26 @@ pub fn parse(text: &str, path: &Path) -> Result<Spec> {
     let mut runs = Vec::new();
     for a in &file.application {
         let entry = registry::entry(&a.name).ok_or_else(|| {
-            near(
-                &a.name,
-                format!(
-                    "experiment spec: \"{}\" is not a cache-based integrator (one of: {})",
-                    a.name,
-                    registry::names()
-                ),
-            )
+            near(&a.name, format!("\"{}\" is not a cache-based integrator (one of: {})", a.name, registry::names()))
         })?;
         let placements = a
             .placements
             .iter()
             .map(|p| match Placement::parse(p) {
-                Ok(Placement::Reference) => {
-                    Err(near(p, "experiment spec: \"none\" is the reference; every sweep has it".into()))
-                }
+                Ok(Placement::Reference) => Err(near(p, "\"none\" is the reference; every sweep has it".into())),
                 Ok(_) => Ok(p.clone()),
-                Err(e) => Err(near(p, format!("experiment spec: {e}"))),
+                Err(e) => Err(near(p, format!("{e}"))),
             })
             .collect::<Result<Vec<_>>>()?;
         let budgets: Vec<usize> = match (&a.caches, &a.density) {
             (Some(c), None) if !c.is_empty() && c.iter().all(|&n| n > 0) => c.clone(),
+            (None, Some(_)) if file.resolution.is_none() => {
+                return Err(near("density", "density needs the resolution (the paper's density is per pixel)".into()));
+            }
             (None, Some(d)) if !d.is_empty() && d.iter().all(|&x| x > 0.0 && x.is_finite()) => d
                 .iter()
                 .map(|&x| {
+                    let [w, h] = file.resolution.unwrap_or([1, 1]);
                     ((x * entry.paper_caches as f64 * (w as f64 * h as f64) / PAPER_PIXELS).round() as usize).max(1)
                 })
                 .collect(),
@@ -242,7 +290,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Spec> {
                 return Err(near(
                     &a.name,
                     format!(
-                        "experiment spec: application \"{}\" needs either caches = [positive counts] or density = [positive factors]",
+                        "application \"{}\" needs either caches = [positive counts] or density = [positive factors]",
                         a.name
                     ),
                 ));
@@ -251,37 +299,34 @@ pub fn parse(text: &str, path: &Path) -> Result<Spec> {
         let fixed: Vec<(String, String)> = a.set.iter().map(|(k, v)| (k.clone(), v.text())).collect();
         for (k, vs) in &a.vary {
             if vs.is_empty() {
-                return Err(near(k, format!("experiment spec: vary.{k} lists no values")));
+                return Err(near(k, format!("vary.{k} lists no values")));
             }
             if a.set.contains_key(k) {
-                return Err(near(k, format!("experiment spec: {k} is both set and varied")));
+                return Err(near(k, format!("{k} is both set and varied")));
             }
         }
         if let Some(names) = &a.scenes
             && let Some(bad) = names.iter().find(|n| !scenes.iter().any(|(s, _)| s == *n))
         {
-            return Err(near(
-                bad,
-                format!("experiment spec: application \"{}\" names scene \"{bad}\", which no [[scene]] has", a.name),
-            ));
+            return Err(near(bad, format!("application \"{}\" names scene \"{bad}\", which no [[scene]] has", a.name)));
         }
         let per_sample = match (entry.per_sample, a.per_pixel.is_empty()) {
             (_, true) => None,
             (Some(p), false) if a.per_pixel.iter().all(|&n| n > 0) => Some(p),
             (Some(_), false) => {
-                return Err(near("per_pixel", "experiment spec: per_pixel counts must be positive".into()));
+                return Err(near("per_pixel", "per_pixel counts must be positive".into()));
             }
             (None, false) => {
-                return Err(near("per_pixel", format!("experiment spec: \"{}\" has no per-pixel form", a.name)));
+                return Err(near("per_pixel", format!("\"{}\" has no per-pixel form", a.name)));
             }
         };
         if let Some(p) = per_sample
             && a.vary.contains_key(p.count)
         {
-            return Err(near(
-                p.count,
-                format!("experiment spec: per_pixel sets {} itself; it cannot be varied beside it", p.count),
-            ));
+            return Err(near(p.count, format!("per_pixel sets {} itself; it cannot be varied beside it", p.count)));
+        }
+        if a.baselines.contains(&0) {
+            return Err(near("baselines", "baselines counts must be positive".into()));
         }
         let combos = combinations(&a.vary);
         for (scene, file_path) in &scenes {
@@ -309,6 +354,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Spec> {
                         varied: String::new(),
                         reference: ref_id.clone(),
                         samples: None,
+                        baseline: None,
                     });
                     // The application's own estimator per pixel, once per reference, every seed.
                     for (p, &n) in per_sample.iter().flat_map(|p| a.per_pixel.iter().map(move |n| (p, n))) {
@@ -331,8 +377,36 @@ pub fn parse(text: &str, path: &Path) -> Result<Spec> {
                                 varied: String::new(),
                                 reference: ref_id.clone(),
                                 samples: Some(n),
+                                baseline: None,
                             });
                         }
+                    }
+                    // The application's per-pixel baselines, once per reference, seed 0: their converged
+                    // image, then every baseline at each count.
+                    let kinds = a.baselines.first().map(|_| BaselineRun::Converged).into_iter();
+                    for kind in kinds.chain(a.baselines.iter().map(|&n| BaselineRun::Rays(n))) {
+                        let what = match kind {
+                            BaselineRun::Converged => CONVERGED.to_string(),
+                            BaselineRun::Rays(n) => format!("bl{n}"),
+                        };
+                        runs.push(Job {
+                            id: format!("{scene}-{}-{what}{}", a.name, super::variant(&ref_set)),
+                            scene: scene.clone(),
+                            file: file_path.clone(),
+                            application: a.name.clone(),
+                            placement: Placement::REFERENCE.to_string(),
+                            caches: 1,
+                            seed: 0,
+                            resolution: file.resolution,
+                            set: ref_set.clone(),
+                            varied: String::new(),
+                            reference: ref_id.clone(),
+                            samples: match kind {
+                                BaselineRun::Converged => None,
+                                BaselineRun::Rays(n) => Some(n),
+                            },
+                            baseline: Some(kind),
+                        });
                     }
                 }
                 let varied: String = combo.iter().map(|(k, v)| format!("{k}={v};")).collect();
@@ -359,6 +433,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Spec> {
                                 varied: varied.trim_end_matches(';').to_string(),
                                 reference: ref_id.clone(),
                                 samples: None,
+                                baseline: None,
                             });
                         }
                     }
@@ -370,10 +445,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Spec> {
     jobs.extend(runs);
     let mut ids = std::collections::HashSet::new();
     if let Some(dup) = jobs.iter().find(|j| !ids.insert(j.id.as_str())) {
-        return Err(Error::file(
-            path,
-            format!("experiment spec: two runs have the id \"{}\" (repeated values?)", dup.id),
-        ));
+        return Err(near("", format!("two runs have the id \"{}\" (repeated values?)", dup.id)));
     }
     Ok(Spec { path: path.to_path_buf(), jobs })
 }
@@ -455,6 +527,31 @@ mod tests {
         assert!(e.contains("nope") && e.contains("[[scene]]"), "{e}");
         let s = spec("placements = [\"im\"]\ncaches = [10]\nscenes = [\"a-s\"]\n").unwrap();
         assert_eq!(s.jobs.len(), 1 + 2);
+    }
+
+    #[test]
+    fn baselines_add_a_converged_job_and_one_job_per_count_at_seed_0() {
+        let s = spec("placements = [\"im\"]\ncaches = [10]\nbaselines = [1, 4]\n").unwrap();
+        let b: Vec<&Job> = s.jobs.iter().filter(|j| j.baseline.is_some()).collect();
+        assert_eq!(b.len(), 3, "{b:#?}");
+        assert_eq!(b[0].baseline, Some(BaselineRun::Converged));
+        assert_eq!(b[0].method(), CONVERGED);
+        assert_eq!((b[2].baseline, b[2].seed, b[2].method().as_str()), (Some(BaselineRun::Rays(4)), 0, "baselines:4"));
+        assert!(b.iter().all(|j| j.reference == s.jobs[0].id && j.placement == "none"));
+        let e = spec("placements = [\"im\"]\ncaches = [10]\nbaselines = [0]\n").unwrap_err().to_string();
+        assert!(e.contains("baselines"), "{e}");
+    }
+
+    #[test]
+    fn without_a_resolution_the_scene_keeps_its_own_and_density_is_refused() {
+        let text = format!(
+            "[[scene]]\nfile = \"s.pbrt\"\n[[application]]\nname = \"{}\"\nplacements = [\"im\"]\n",
+            first_app()
+        );
+        let s = parse(&format!("{text}caches = [5]\n"), Path::new("x.toml")).unwrap();
+        assert!(s.jobs.iter().all(|j| j.resolution.is_none()));
+        let e = parse(&format!("{text}density = [1]\n"), Path::new("x.toml")).unwrap_err().to_string();
+        assert!(e.contains("density needs the resolution"), "{e}");
     }
 
     #[test]

@@ -57,6 +57,12 @@ pub fn ok(records: &[Record]) -> impl Iterator<Item = &Record> {
     records.iter().filter(|r| r.status == "ok")
 }
 
+/// Whether a record is a cache run (not a per-pixel run, a baseline or the converged image, whose
+/// placement is `none`).
+pub fn is_cache_run(r: &Record) -> bool {
+    r.placement != crate::integrator::cache::Placement::REFERENCE
+}
+
 /// (scene, application) pairs in order.
 pub fn pairs(records: &[Record]) -> Vec<(String, String)> {
     let mut keys: Vec<(String, String)> = ok(records).map(|r| (r.scene.clone(), r.application.clone())).collect();
@@ -68,7 +74,7 @@ pub fn pairs(records: &[Record]) -> Vec<(String, String)> {
 /// The budgets of the plain cache runs (no varied parameter) of `scene` and `app`, ascending.
 pub fn budgets(records: &[Record], scene: &str, app: &str) -> Vec<usize> {
     let mut b: Vec<usize> = ok(records)
-        .filter(|r| r.scene == scene && r.application == app && r.varied.is_empty() && r.samples.is_none())
+        .filter(|r| r.scene == scene && r.application == app && r.varied.is_empty() && is_cache_run(r))
         .map(|r| r.caches)
         .collect();
     b.sort();
@@ -92,7 +98,7 @@ pub fn methods_at<'a>(
 ) -> BTreeMap<String, Vec<&'a Record>> {
     let mut m: BTreeMap<String, Vec<&Record>> = BTreeMap::new();
     for r in ok(records).filter(|r| {
-        r.scene == scene && r.application == app && r.caches == caches && r.varied.is_empty() && r.samples.is_none()
+        r.scene == scene && r.application == app && r.caches == caches && r.varied.is_empty() && is_cache_run(r)
     }) {
         m.entry(r.placement.clone()).or_default().push(r);
     }

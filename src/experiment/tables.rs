@@ -3,7 +3,8 @@
 //! parameter, with each method at its default and at its best value), its Table 4 (per-stage times, median
 //! of the seeds, with the placement's share with and without the G-buffer); and the claims table (which
 //! method is best in each setting, whether clearly, and whether the per-pixel integrator reaches its error
-//! in less time).
+//! in less time). The ratio tables (to IM, at equal time, against the converged image) are in
+//! [`super::ratios`]; [`all`] gathers every table of `tables.md`.
 //!
 //! Depends only on the records of `jobs` and on [`super::summary`]; it reads no file.
 
@@ -91,6 +92,9 @@ fn pm(s: &Summary) -> String {
 /// Every table of the sweep, in the order of `tables.md`.
 pub fn all(records: &[Record]) -> Vec<Table> {
     let mut t = claims(records);
+    t.extend(super::ratios::to_im(records));
+    t.extend(super::ratios::equal_time(records));
+    t.extend(super::ratios::converged(records));
     t.extend(ablation(records));
     t.extend(swept(records));
     t.extend(timings(records));

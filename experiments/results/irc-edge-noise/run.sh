@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Each renderer's own noise on the Cornell box's emitter and the ceiling around it, at the 64 lowdiscrepancy
+# pixel samples of the pbrt-v2 comparison (experiments/results/irc-peer/peer.md): `directlighting` over a crop window
+# around the light (64×14 pixels), against pbrt-v3's own image of that window at 4096 samples. There the
+# ceiling gets no direct light (the emitter faces down), so a pixel's error is the estimate of how much of it
+# the emitter covers. Run from the repository root after `cargo build --release`; writes into $OUT
+# (default /tmp/cachert-edge-noise) and prints the table of edge_noise.py.
+set -euo pipefail
+SCENES=../shared/scenes/bitterli-cornell-box-v3
+V2=../shared/tools/pbrt-v2/pbrt
+V3=../shared/tools/pbrt-v3/pbrt
+OUT=${OUT:-/tmp/cachert-edge-noise}
+for f in "$SCENES/direct-ref.pbrt" "$V2" "$V3"; do
+  [ -e "$f" ] || { echo "skipped: $f is absent" >&2; exit 0; }
+done
+mkdir -p "$OUT"
+# Columns 96–159 and rows 14–27 of the 256×256 film: the emitter and a border of ceiling around it.
+CROP='"float cropwindow" [0.375 0.625 0.0546875 0.109375]'
+v3scene() {
+  sed -e "s/^Sampler.*/Sampler \"lowdiscrepancy\" \"integer pixelsamples\" [$1]/" \
+      -e "s/^Film.*/Film \"image\" \"integer xresolution\" [256] \"integer yresolution\" [256] $CROP/" \
+      "$SCENES/direct-ref.pbrt"
+}
+v3scene 4096 > "$OUT/truth.pbrt"
+v3scene 64 > "$OUT/crop64.pbrt"
+sed -e "s/^Film.*/Film \"image\" \"integer xresolution\" [256] \"integer yresolution\" [256] $CROP/" \
+  "$SCENES/pbrt-v2/direct-v2.pbrt" > "$OUT/crop64-v2.pbrt"
+"$V3" --quiet --nthreads 2 --outfile "$OUT/truth.pfm" "$OUT/truth.pbrt" > /dev/null
+"$V3" --quiet --nthreads 2 --outfile "$OUT/v3.pfm" "$OUT/crop64.pbrt" > /dev/null
+# cachert: 32 seeds. The same scene at 4096 samples, two seeds, for the truth's agreement.
+for s in $(seq 0 31); do
+  target/release/cachert render --quiet --nthreads 2 --seed "$s" --outfile "$OUT/cachert-$s.pfm" "$OUT/crop64.pbrt"
+done
+for s in 0 1; do
+  target/release/cachert render --quiet --nthreads 2 --seed "$s" --outfile "$OUT/cachert-4096-$s.pfm" "$OUT/truth.pbrt"
+done
+# pbrt-v2 takes no seed; its render pass seeds each task by its number, and --ncores 1, 2, 4, …, 256 give
+# 32, 64, …, 8192 tasks over this window (RoundUpPow2(max(32 · cores, pixels / 256))): 9 different streams.
+for n in 1 2 4 8 16 32 64 128 256; do
+  "$V2" --quiet --ncores "$n" --outfile "$OUT/v2-$n.pfm" "$OUT/crop64-v2.pbrt" > /dev/null 2>&1
+done
+python3 experiments/results/irc-edge-noise/edge_noise.py "$OUT"
