@@ -4,7 +4,7 @@
 //! Σ cos θ / (pdf · n), which is π where nothing occludes. Surfaces without a material are passed through.
 //!
 //! This per-pixel integrator is the brute-force reference the cache-based applications are measured against;
-//! its cached counterpart, `cacheao`, is `application::ambient_occlusion` (the same file name one layer up).
+//! its cached counterpart is `src/application/ambient_occlusion.rs` (the same file name one layer up).
 
 use glam::Vec3A;
 
