@@ -312,11 +312,11 @@ mod tests {
         assert!(err("").contains("r.csv:1:1: expected the header line"), "{}", err(""));
         let head = "id,status,scene,application,placement,method,caches,seed,rmse,flip,total_s\n";
         assert!(err("id,status\n").contains("r.csv:1:1: expected a column \"scene\""), "{}", err("id,status\n"));
-        let bad = format!("{head}a,ok,s,cacheao,im,im,10,0,0.1,zero,2\n");
+        let bad = format!("{head}a,ok,s,someapp,im,im,10,0,0.1,zero,2\n");
         assert!(err(&bad).contains("r.csv:2:31: expected flip (a number), found \"zero\""), "{}", err(&bad));
         let short = format!("{head}a,ok\n");
         assert!(err(&short).contains("r.csv:2:1: expected 11 fields"), "{}", err(&short));
-        let good = parse_csv(p, &format!("{head}a,ok,s,cacheao,im,im,10,1,0.1,0.2,2.5\n")).unwrap();
+        let good = parse_csv(p, &format!("{head}a,ok,s,someapp,im,im,10,1,0.1,0.2,2.5\n")).unwrap();
         assert_eq!((good[0].caches, good[0].seed, good[0].times["total"]), (10, 1, 2.5));
     }
 }
