@@ -261,7 +261,7 @@ fn the_near_split_is_unbiased_and_takes_out_the_near_vpls_spikes() {
     // Power sampling's weight is Σflux·f/d²: the near VPLs are its spikes, and the ball takes them out
     // (measured: the summed quadrant spread falls to 0.75 of its value without). The cached estimator's
     // spread here hardly moves (0.94): its caches, on the same two planes, already give those VPLs density;
-    // the bathroom's bevels, where they do not, are in results/importance/README.md. Measured with
+    // the bathroom's bevels, where they do not, are in experiments/notes/importance.md. Measured with
     // independent draws: stratified ones already spread power sampling's draws of a pixel over those VPLs,
     // and the split's share of the narrowing falls (0.88).
     let mut independent = base.to_vec();
@@ -318,7 +318,7 @@ fn draws_stratified_across_a_pixels_samples_stay_unbiased_and_narrow_the_spread(
     // the spread of the image over seeds — on the open corner, whose caches all see the same light; on the
     // room at 96×72 the cached estimate's spread did not move (its 16 caches differ too much for the
     // positions in their distributions to mean the same VPLs), which the 640×360 scenes of
-    // results/importance/README.md do not share.
+    // experiments/notes/importance.md do not share.
     let (loaded, base) = (small_room(), ROOM_BASE);
     let r = reference(&loaded, &base);
     assert_each_unbiased(

@@ -63,10 +63,19 @@ pub struct ExperimentArgs {
         "baseline_samples",
     ])]
     pub replot: Option<PathBuf>,
+    /// With --replot: write only DIR/equal-time-vs-<DIR2>.md, the equal-time tables of DIR with the per-pixel
+    /// runs taken from DIR2/results.csv (another sweep against the same reference, say without a parameter
+    /// that changes the per-pixel estimators).
+    #[arg(long, value_name = "DIR2", requires = "replot")]
+    pub baselines: Option<PathBuf>,
 }
 
 /// Runs the sweep and returns the table.
 pub fn run(a: &ExperimentArgs) -> Result<String> {
+    if let (Some(dir), Some(other)) = (&a.replot, &a.baselines) {
+        let written = crate::experiment::results::rebuild_against(dir, other)?;
+        return Ok(format!("rebuilt: {}\n", written.display()));
+    }
     if let Some(dir) = &a.replot {
         let written = crate::experiment::results::rebuild(dir, &mut |line| eprintln!("{line}"))?;
         return Ok(written.iter().map(|p| format!("rebuilt: {}\n", p.display())).collect());

@@ -1,7 +1,8 @@
 //! The comparison tables of a sweep: each cache method's error as a ratio to IM's (what
 //! `experiments/summarise.py` printed), each per-pixel estimator's error at the cache method's wall time as
-//! a ratio to the cache method's (what `results/importance/equal_time.py` printed), and every run measured
-//! against the converged per-pixel image (the flag form's second table).
+//! a ratio to the cache method's (what the retired `equal_time.py` printed; its two-file form, baselines from
+//! another sweep, is `--replot DIR --baselines DIR2`), and every run measured against the converged
+//! per-pixel image (the flag form's second table).
 //!
 //! Depends only on the records of `jobs`, [`super::summary`] and [`super::tables::Table`]; it reads no file.
 
@@ -119,9 +120,16 @@ fn per_pixel_points(records: &[Record], scene: &str, app: &str) -> BTreeMap<Stri
 /// seeds, each per-pixel estimator's error at that time, and the ratio estimator / cache (> 1: the caches
 /// ahead).
 pub fn equal_time(records: &[Record]) -> Vec<Table> {
+    equal_time_against(records, records, "")
+}
+
+/// [`equal_time`] with the per-pixel runs taken from `baselines` (another sweep's records, say one without
+/// a parameter that changes the estimators, measured against the same reference); `from` names where they
+/// came from in each table's title (empty: the same sweep).
+pub fn equal_time_against(records: &[Record], baselines: &[Record], from: &str) -> Vec<Table> {
     let mut out = Vec::new();
     for (scene, app) in pairs(records) {
-        let bases = per_pixel_points(records, &scene, &app);
+        let bases = per_pixel_points(baselines, &scene, &app);
         if bases.is_empty() {
             continue;
         }
@@ -168,7 +176,11 @@ pub fn equal_time(records: &[Record]) -> Vec<Table> {
             })
             .collect();
         out.push(Table {
-            title: format!("At equal time: {scene}, {app}"),
+            title: if from.is_empty() {
+                format!("At equal time: {scene}, {app}")
+            } else {
+                format!("At equal time: {scene}, {app}, per-pixel runs from {from}")
+            },
             note: format!(
                 "Each cache setting's mean wall seconds, RMSE and HDR-FLIP over seeds (min–max over seeds); each \
                  per-pixel estimator's error at that time, interpolated linearly in log-time/log-error between \

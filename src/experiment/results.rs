@@ -290,6 +290,30 @@ pub fn rebuild(dir: &Path, log: &mut dyn FnMut(&str)) -> Result<Vec<PathBuf>> {
     Ok(written)
 }
 
+/// Writes `dir/equal-time-vs-<name of baselines>.md`: the equal-time tables of `dir/results.csv` with the
+/// per-pixel runs taken from `baselines/results.csv` instead (`cachert experiment --replot DIR --baselines
+/// DIR2`); returns the file written.
+pub fn rebuild_against(dir: &Path, baselines: &Path) -> Result<PathBuf> {
+    let records = read_csv(&dir.join(CSV))?;
+    let others = read_csv(&baselines.join(CSV))?;
+    let name = baselines.file_name().map_or("baselines".to_string(), |n| n.to_string_lossy().into_owned());
+    let tables = super::ratios::equal_time_against(&records, &others, &format!("`{}`", baselines.display()));
+    if tables.is_empty() {
+        return Err(Error::file(baselines.join(CSV), "no per-pixel runs for the scenes of the sweep"));
+    }
+    let path = dir.join(format!("equal-time-vs-{name}.md"));
+    let mut markdown = format!(
+        "_Generated from `{CSV}` and `{}/{CSV}` by `cachert experiment --replot {} --baselines {}`; do not edit: \
+         run the command again._\n\n",
+        baselines.display(),
+        dir.display(),
+        baselines.display()
+    );
+    markdown.extend(tables.iter().map(|t| t.markdown()));
+    crate::image::write_bytes(&path, markdown.as_bytes())?;
+    Ok(path)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
