@@ -39,7 +39,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use crate::application::registry;
+use crate::application::{PerSample, registry};
 use crate::error::{Error, Result, SourceLoc};
 use crate::integrator::cache::Placement;
 use crate::integrator::cache::settings::PAPER_PIXELS;
@@ -245,8 +245,80 @@ pub fn expand(file: &SpecFile, path: &Path, near: &dyn Fn(&str, String) -> Error
     if file.scene.is_empty() || file.application.is_empty() {
         return Err(near("", "needs at least one [[scene]] and one [[application]]".into()));
     }
+    let scenes = scenes_of(file, path, near)?;
+    let mut refs = Vec::new();
+    let mut runs = Vec::new();
+    for a in &file.application {
+        let plan = Plan::of(file, a, &scenes, near)?;
+        for (scene, file_path) in &scenes {
+            if a.scenes.as_ref().is_some_and(|names| !names.contains(scene)) {
+                continue;
+            }
+            // The reference depends on the application and the parameters of every run that are not
+            // placement-only; a varied parameter that changes the reference gets one reference per value.
+            for combo in &plan.combos {
+                let mut set = plan.fixed.clone();
+                set.extend(combo.iter().cloned());
+                let ref_set = ref_set_of(&set);
+                let ref_id = format!("{scene}-{}-none{}", a.name, super::variant(&ref_set));
+                // The reference; every other job of this scene and combination starts from it.
+                let reference = Job {
+                    id: ref_id.clone(),
+                    scene: scene.clone(),
+                    file: file_path.clone(),
+                    application: a.name.clone(),
+                    placement: Placement::REFERENCE.to_string(),
+                    caches: 1,
+                    seed: 0,
+                    resolution: file.resolution,
+                    set: ref_set,
+                    varied: String::new(),
+                    reference: ref_id.clone(),
+                    samples: None,
+                    baseline: None,
+                };
+                if !refs.iter().any(|j: &Job| j.id == ref_id) {
+                    runs.extend(per_pixel_jobs(a, &plan, &reference, file.seeds));
+                    refs.push(reference.clone());
+                }
+                let varied: String = combo.iter().map(|(k, v)| format!("{k}={v};")).collect();
+                for &caches in &plan.budgets {
+                    for p in &plan.placements {
+                        for seed in 0..file.seeds {
+                            let tag = p.replace([':', '+'], "_");
+                            let vary_tag = if combo.is_empty() {
+                                String::new()
+                            } else {
+                                super::tag(&combo.iter().collect::<Vec<_>>())
+                            };
+                            runs.push(Job {
+                                id: format!("{scene}-{}-{tag}-{caches}{vary_tag}-s{seed}", a.name),
+                                placement: p.clone(),
+                                caches,
+                                seed,
+                                set: set.clone(),
+                                varied: varied.trim_end_matches(';').to_string(),
+                                ..reference.clone()
+                            });
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let mut jobs = refs;
+    jobs.extend(runs);
+    let mut ids = std::collections::HashSet::new();
+    if let Some(dup) = jobs.iter().find(|j| !ids.insert(j.id.as_str())) {
+        return Err(near("", format!("two runs have the id \"{}\" (repeated values?)", dup.id)));
+    }
+    Ok(Spec { path: path.to_path_buf(), jobs })
+}
+
+/// The spec's scenes as (name, file), files relative to the spec's folder; names checked and unique.
+fn scenes_of(file: &SpecFile, path: &Path, near: &dyn Fn(&str, String) -> Error) -> Result<Vec<(String, PathBuf)>> {
     let dir = path.parent().unwrap_or(Path::new("."));
-    let mut scenes = Vec::new();
+    let mut scenes: Vec<(String, PathBuf)> = Vec::new();
     for s in &file.scene {
         let p = Path::new(&s.file);
         let full = if p.is_absolute() { p.to_path_buf() } else { dir.join(p) };
@@ -259,9 +331,30 @@ pub fn expand(file: &SpecFile, path: &Path, near: &dyn Fn(&str, String) -> Error
         }
         scenes.push((name, full));
     }
-    let mut refs = Vec::new();
-    let mut runs = Vec::new();
-    for a in &file.application {
+    Ok(scenes)
+}
+
+/// One `[[application]]` checked and resolved: what its jobs are made of.
+struct Plan {
+    /// Its placements, as written (`none` refused: every sweep has the reference).
+    placements: Vec<String>,
+    /// Its budgets: `caches`, or `density` × the paper's budget scaled to the resolution.
+    budgets: Vec<usize>,
+    /// The parameters of every run (`set`).
+    fixed: Vec<(String, String)>,
+    /// Every combination of the `vary` values (one empty combination without `vary`).
+    combos: Vec<Vec<(String, String)>>,
+    /// The application's own estimator per pixel, when `per_pixel` asks for it.
+    per_sample: Option<PerSample>,
+}
+
+impl Plan {
+    fn of(
+        file: &SpecFile,
+        a: &AppSpec,
+        scenes: &[(String, PathBuf)],
+        near: &dyn Fn(&str, String) -> Error,
+    ) -> Result<Plan> {
         let entry = registry::entry(&a.name).ok_or_else(|| {
             near(&a.name, format!("\"{}\" is not a cache-based integrator (one of: {})", a.name, registry::names()))
         })?;
@@ -328,126 +421,45 @@ pub fn expand(file: &SpecFile, path: &Path, near: &dyn Fn(&str, String) -> Error
         if a.baselines.contains(&0) {
             return Err(near("baselines", "baselines counts must be positive".into()));
         }
-        let combos = combinations(&a.vary);
-        for (scene, file_path) in &scenes {
-            if a.scenes.as_ref().is_some_and(|names| !names.contains(scene)) {
-                continue;
-            }
-            // The reference depends on the application and the parameters of every run that are not
-            // placement-only; a varied parameter that changes the reference gets one reference per value.
-            for combo in &combos {
-                let mut set = fixed.clone();
-                set.extend(combo.iter().cloned());
-                let ref_set = ref_set_of(&set);
-                let ref_id = format!("{scene}-{}-none{}", a.name, super::variant(&ref_set));
-                if !refs.iter().any(|j: &Job| j.id == ref_id) {
-                    refs.push(Job {
-                        id: ref_id.clone(),
-                        scene: scene.clone(),
-                        file: file_path.clone(),
-                        application: a.name.clone(),
-                        placement: Placement::REFERENCE.to_string(),
-                        caches: 1,
-                        seed: 0,
-                        resolution: file.resolution,
-                        set: ref_set.clone(),
-                        varied: String::new(),
-                        reference: ref_id.clone(),
-                        samples: None,
-                        baseline: None,
-                    });
-                    // The application's own estimator per pixel, once per reference, every seed.
-                    for (p, &n) in per_sample.iter().flat_map(|p| a.per_pixel.iter().map(move |n| (p, n))) {
-                        // The reference's settings with the count replaced.
-                        let mut pp_set: Vec<(String, String)> =
-                            ref_set.iter().filter(|(k, _)| k != p.count).cloned().collect();
-                        pp_set.extend(p.set.iter().map(|(k, v)| (k.to_string(), v.to_string())));
-                        pp_set.push((p.count.to_string(), n.to_string()));
-                        for seed in 0..file.seeds {
-                            runs.push(Job {
-                                id: format!("{scene}-{}-pp{n}{}-s{seed}", a.name, super::variant(&ref_set)),
-                                scene: scene.clone(),
-                                file: file_path.clone(),
-                                application: a.name.clone(),
-                                placement: Placement::REFERENCE.to_string(),
-                                caches: 1,
-                                seed,
-                                resolution: file.resolution,
-                                set: pp_set.clone(),
-                                varied: String::new(),
-                                reference: ref_id.clone(),
-                                samples: Some(n),
-                                baseline: None,
-                            });
-                        }
-                    }
-                    // The application's per-pixel baselines, once per reference, seed 0: their converged
-                    // image, then every baseline at each count.
-                    let kinds = a.baselines.first().map(|_| BaselineRun::Converged).into_iter();
-                    for kind in kinds.chain(a.baselines.iter().map(|&n| BaselineRun::Rays(n))) {
-                        let what = match kind {
-                            BaselineRun::Converged => CONVERGED.to_string(),
-                            BaselineRun::Rays(n) => format!("bl{n}"),
-                        };
-                        runs.push(Job {
-                            id: format!("{scene}-{}-{what}{}", a.name, super::variant(&ref_set)),
-                            scene: scene.clone(),
-                            file: file_path.clone(),
-                            application: a.name.clone(),
-                            placement: Placement::REFERENCE.to_string(),
-                            caches: 1,
-                            seed: 0,
-                            resolution: file.resolution,
-                            set: ref_set.clone(),
-                            varied: String::new(),
-                            reference: ref_id.clone(),
-                            samples: match kind {
-                                BaselineRun::Converged => None,
-                                BaselineRun::Rays(n) => Some(n),
-                            },
-                            baseline: Some(kind),
-                        });
-                    }
-                }
-                let varied: String = combo.iter().map(|(k, v)| format!("{k}={v};")).collect();
-                for &caches in &budgets {
-                    for p in &placements {
-                        for seed in 0..file.seeds {
-                            let tag = p.replace([':', '+'], "_");
-                            let vary_tag = if combo.is_empty() {
-                                String::new()
-                            } else {
-                                super::tag(&combo.iter().collect::<Vec<_>>())
-                            };
-                            let id = format!("{scene}-{}-{tag}-{caches}{vary_tag}-s{seed}", a.name);
-                            runs.push(Job {
-                                id,
-                                scene: scene.clone(),
-                                file: file_path.clone(),
-                                application: a.name.clone(),
-                                placement: p.clone(),
-                                caches,
-                                seed,
-                                resolution: file.resolution,
-                                set: set.clone(),
-                                varied: varied.trim_end_matches(';').to_string(),
-                                reference: ref_id.clone(),
-                                samples: None,
-                                baseline: None,
-                            });
-                        }
-                    }
-                }
-            }
+        Ok(Plan { placements, budgets, fixed, combos: combinations(&a.vary), per_sample })
+    }
+}
+
+/// The jobs rendered once per reference beside it: the application's own estimator per pixel at each
+/// `per_pixel` count and every seed, then its per-pixel baselines at seed 0 (their converged image, then
+/// every baseline at each `baselines` count).
+fn per_pixel_jobs(a: &AppSpec, plan: &Plan, reference: &Job, seeds: u64) -> Vec<Job> {
+    let mut jobs = Vec::new();
+    let (scene, ref_set) = (&reference.scene, &reference.set);
+    for (p, &n) in plan.per_sample.iter().flat_map(|p| a.per_pixel.iter().map(move |n| (p, n))) {
+        // The reference's settings with the count replaced.
+        let mut pp_set: Vec<(String, String)> = ref_set.iter().filter(|(k, _)| k != p.count).cloned().collect();
+        pp_set.extend(p.set.iter().map(|(k, v)| (k.to_string(), v.to_string())));
+        pp_set.push((p.count.to_string(), n.to_string()));
+        for seed in 0..seeds {
+            jobs.push(Job {
+                id: format!("{scene}-{}-pp{n}{}-s{seed}", a.name, super::variant(ref_set)),
+                seed,
+                set: pp_set.clone(),
+                samples: Some(n),
+                ..reference.clone()
+            });
         }
     }
-    let mut jobs = refs;
-    jobs.extend(runs);
-    let mut ids = std::collections::HashSet::new();
-    if let Some(dup) = jobs.iter().find(|j| !ids.insert(j.id.as_str())) {
-        return Err(near("", format!("two runs have the id \"{}\" (repeated values?)", dup.id)));
+    let kinds = a.baselines.first().map(|_| BaselineRun::Converged).into_iter();
+    for kind in kinds.chain(a.baselines.iter().map(|&n| BaselineRun::Rays(n))) {
+        let (what, samples) = match kind {
+            BaselineRun::Converged => (CONVERGED.to_string(), None),
+            BaselineRun::Rays(n) => (format!("bl{n}"), Some(n)),
+        };
+        jobs.push(Job {
+            id: format!("{scene}-{}-{what}{}", a.name, super::variant(ref_set)),
+            samples,
+            baseline: Some(kind),
+            ..reference.clone()
+        });
     }
-    Ok(Spec { path: path.to_path_buf(), jobs })
+    jobs
 }
 
 /// The pairs of `set` that change the reference (those that are not placement-only).
