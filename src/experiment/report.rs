@@ -158,8 +158,16 @@ fn group(spec: &Spec, records: &[Record], out: &Path, scene: &str, app: &str, n:
         escape(scene),
         escape(app)
     );
-    // The comparer: two pictures of this group, B over A up to the slider.
-    let all: Vec<&Picture> = pictures.iter().chain(&maps).chain(&overlays).collect();
+    comparer_and_grids(&mut h, n, &pictures, &maps, &overlays);
+    largest_error_crops(&mut h, &reference, k, &images, &error_sum)?;
+    h.push_str("</section>\n");
+    Ok(Some(h))
+}
+
+/// The group's picture comparer (two pictures, B over A up to a slider) and its grids of images, HDR-FLIP
+/// maps and cache overlays.
+fn comparer_and_grids(h: &mut String, n: usize, pictures: &[Picture], maps: &[Picture], overlays: &[Picture]) {
+    let all: Vec<&Picture> = pictures.iter().chain(maps).chain(overlays).collect();
     let options: String =
         all.iter().map(|p| format!("<option value=\"{}\">{}</option>", p.id, escape(&p.caption))).collect();
     let second = all.get(1).map_or(String::new(), |p| p.id.clone());
@@ -170,7 +178,7 @@ fn group(spec: &Spec, records: &[Record], out: &Path, scene: &str, app: &str, n:
          <div class=\"stage\"><img class=\"ia\" alt=\"A\"><img class=\"ib\" alt=\"B\"></div>\n\
          <input type=\"range\" min=\"0\" max=\"100\" value=\"50\" class=\"slider\" aria-label=\"A | B\"></div>"
     );
-    for (title, list) in [("Images", &pictures), ("HDR-FLIP maps", &maps), ("Cache overlays", &overlays)] {
+    for (title, list) in [("Images", pictures), ("HDR-FLIP maps", maps), ("Cache overlays", overlays)] {
         if list.is_empty() {
             continue;
         }
@@ -187,9 +195,19 @@ fn group(spec: &Spec, records: &[Record], out: &Path, scene: &str, app: &str, n:
         }
         h.push_str("</div>\n");
     }
-    // Crops of the windows where the methods' summed FLIP is largest.
+}
+
+/// Magnified crops of the windows where the methods' summed HDR-FLIP (`error_sum`) is largest: the
+/// reference's and each method's.
+fn largest_error_crops(
+    h: &mut String,
+    reference: &Image,
+    k: f32,
+    images: &[(String, Image)],
+    error_sum: &[f32],
+) -> Result<()> {
     let size = (reference.width.min(reference.height) / 5).max(8);
-    let windows = worst_windows(&error_sum, reference.width, reference.height, size, 2);
+    let windows = worst_windows(error_sum, reference.width, reference.height, size, 2);
     if !windows.is_empty() {
         let _ = writeln!(
             h,
@@ -199,7 +217,7 @@ fn group(spec: &Spec, records: &[Record], out: &Path, scene: &str, app: &str, n:
     for (x, y) in windows {
         let _ = writeln!(h, "<p>window at x {x}, y {y}</p>\n<div class=\"grid crops\">");
         let window = (x, y, size, size);
-        let mut crops = vec![("reference".to_string(), crop_scaled(&reference, k, window))];
+        let mut crops = vec![("reference".to_string(), crop_scaled(reference, k, window))];
         crops.extend(images.iter().map(|(m, img)| (m.clone(), crop_scaled(img, k, window))));
         for (m, c) in crops {
             let _ = writeln!(
@@ -212,8 +230,7 @@ fn group(spec: &Spec, records: &[Record], out: &Path, scene: &str, app: &str, n:
         }
         h.push_str("</div>\n");
     }
-    h.push_str("</section>\n");
-    Ok(Some(h))
+    Ok(())
 }
 
 const STYLE: &str = "body{font-family:sans-serif;margin:1.5em;max-width:1500px;color:#222}\
