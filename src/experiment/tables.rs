@@ -365,7 +365,7 @@ fn claims(records: &[Record]) -> Vec<Table> {
         };
         for caches in summary::budgets(records, &scene, &app) {
             let methods = summary::methods_at(records, &scene, &app, caches);
-            let stats: Vec<(&String, Summary, Summary, f64)> = methods
+            let stats: Vec<MethodStats<'_>> = methods
                 .iter()
                 .filter_map(|(m, rs)| {
                     let (r, f) = errors(rs)?;
@@ -375,50 +375,7 @@ fn claims(records: &[Record]) -> Vec<Table> {
             if stats.is_empty() {
                 continue;
             }
-            let verdict = |metric: fn(&(&String, Summary, Summary, f64)) -> Summary| {
-                let mut order: Vec<&(&String, Summary, Summary, f64)> = stats.iter().collect();
-                order.sort_by(|a, b| metric(a).mean.total_cmp(&metric(b).mean));
-                let best = order[0];
-                match order.get(1) {
-                    Some(second) if metric(best).clearly_below(&metric(second)) => {
-                        format!("**{}** (clearly, next {})", best.0, second.0)
-                    }
-                    Some(second) => format!("{} (within noise of {})", best.0, second.0),
-                    None => best.0.to_string(),
-                }
-            };
-            let best_rmse = stats.iter().min_by(|a, b| a.1.mean.total_cmp(&b.1.mean)).map(|s| (s.1.mean, s.3));
-            let im = stats.iter().find(|s| s.0 == "im");
-            let beat_im: Vec<&str> = stats
-                .iter()
-                .filter(|s| im.is_some_and(|im| s.1.clearly_below(&im.1) && s.2.clearly_below(&im.2)))
-                .map(|s| s.0.as_str())
-                .collect();
-            let lose_im: Vec<&str> = stats
-                .iter()
-                .filter(|s| im.is_some_and(|im| im.1.clearly_below(&s.1) || im.2.clearly_below(&s.2)))
-                .map(|s| s.0.as_str())
-                .collect();
-            let faster = match best_rmse {
-                Some((err, secs)) if !per_pixel.is_empty() => per_pixel
-                    .iter()
-                    .filter(|(_, r, t)| r.mean <= err && t.median <= secs)
-                    .min_by(|a, b| a.2.median.total_cmp(&b.2.median))
-                    .map_or("no".to_string(), |(m, r, t)| {
-                        format!("**yes**: {m} ({:.5} in {:.2} s vs {err:.5} in {secs:.2} s)", r.mean, t.median)
-                    }),
-                _ => "not run".into(),
-            };
-            rows.push(vec![
-                scene.clone(),
-                app.clone(),
-                caches.to_string(),
-                verdict(|s| s.1),
-                verdict(|s| s.2),
-                if beat_im.is_empty() { "—".into() } else { beat_im.join(", ") },
-                if lose_im.is_empty() { "—".into() } else { lose_im.join(", ") },
-                faster,
-            ]);
+            rows.push(claim_row(&scene, &app, caches, &stats, &per_pixel));
         }
     }
     if rows.is_empty() {
@@ -446,6 +403,65 @@ fn claims(records: &[Record]) -> Vec<Table> {
         .to_vec(),
         rows,
     }]
+}
+
+/// One method's figures at one setting: its name, RMSE and HDR-FLIP over seeds, median wall seconds.
+type MethodStats<'a> = (&'a String, Summary, Summary, f64);
+
+/// The row of "Which method wins" for one scene, application and budget: the verdicts in RMSE and HDR-FLIP,
+/// the methods clearly better and worse than IM, and whether a per-pixel run (name, RMSE, seconds) reached
+/// the best RMSE in no more time.
+fn claim_row(
+    scene: &str,
+    app: &str,
+    caches: usize,
+    stats: &[MethodStats<'_>],
+    per_pixel: &[(&str, Summary, Summary)],
+) -> Vec<String> {
+    let verdict = |metric: fn(&MethodStats<'_>) -> Summary| {
+        let mut order: Vec<&MethodStats<'_>> = stats.iter().collect();
+        order.sort_by(|a, b| metric(a).mean.total_cmp(&metric(b).mean));
+        let best = order[0];
+        match order.get(1) {
+            Some(second) if metric(best).clearly_below(&metric(second)) => {
+                format!("**{}** (clearly, next {})", best.0, second.0)
+            }
+            Some(second) => format!("{} (within noise of {})", best.0, second.0),
+            None => best.0.to_string(),
+        }
+    };
+    let best_rmse = stats.iter().min_by(|a, b| a.1.mean.total_cmp(&b.1.mean)).map(|s| (s.1.mean, s.3));
+    let im = stats.iter().find(|s| s.0 == "im");
+    let beat_im: Vec<&str> = stats
+        .iter()
+        .filter(|s| im.is_some_and(|im| s.1.clearly_below(&im.1) && s.2.clearly_below(&im.2)))
+        .map(|s| s.0.as_str())
+        .collect();
+    let lose_im: Vec<&str> = stats
+        .iter()
+        .filter(|s| im.is_some_and(|im| im.1.clearly_below(&s.1) || im.2.clearly_below(&s.2)))
+        .map(|s| s.0.as_str())
+        .collect();
+    let faster = match best_rmse {
+        Some((err, secs)) if !per_pixel.is_empty() => per_pixel
+            .iter()
+            .filter(|(_, r, t)| r.mean <= err && t.median <= secs)
+            .min_by(|a, b| a.2.median.total_cmp(&b.2.median))
+            .map_or("no".to_string(), |(m, r, t)| {
+                format!("**yes**: {m} ({:.5} in {:.2} s vs {err:.5} in {secs:.2} s)", r.mean, t.median)
+            }),
+        _ => "not run".into(),
+    };
+    vec![
+        scene.to_string(),
+        app.to_string(),
+        caches.to_string(),
+        verdict(|s| s.1),
+        verdict(|s| s.2),
+        if beat_im.is_empty() { "—".into() } else { beat_im.join(", ") },
+        if lose_im.is_empty() { "—".into() } else { lose_im.join(", ") },
+        faster,
+    ]
 }
 
 #[cfg(test)]
