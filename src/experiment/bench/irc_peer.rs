@@ -408,22 +408,8 @@ pub fn run(args: &BenchArgs) -> Result<String> {
         for caches in BUDGETS {
             let mut runs = Vec::new();
             for seed in 0..u64::from(args.seeds) {
-                let settings = RenderSettings {
-                    seed,
-                    threads: Some(args.nthreads),
-                    set: vec![("placement".into(), placement.into()), ("caches".into(), caches.to_string())],
-                    ..Default::default()
-                };
-                let (cpu0, t) = (process_cpu_secs().unwrap_or(0.0), Instant::now());
-                let loaded = load_str(&text, &ref_path, LoadOptions::default())?;
-                let out = render(&loaded.scene, loaded.integrator.as_ref(), &settings, &mut Warnings::default())?;
-                let (cpu, wall) = (process_cpu_secs().unwrap_or(0.0) - cpu0, t.elapsed().as_secs_f64());
-                let split = out.cache.as_ref().map(|c| {
-                    let t = &c.stats.times;
-                    [t.initial_computation + t.adaptive_computation, t.render + t.per_pixel_term]
-                });
-                let split = split.map_or([None, None], |[a, b]| [Some(a), Some(b)]);
-                runs.push(measure(&out.image, [cpu, wall], split)?);
+                let (image, times, split) = render_cachert(&text, &ref_path, placement, caches, seed, args.nthreads)?;
+                runs.push(measure(&image, times, split)?);
             }
             push(summarise("cachert", placement, format!("caches {caches}"), &runs));
         }
@@ -436,6 +422,34 @@ pub fn run(args: &BenchArgs) -> Result<String> {
         super::peer_chart::write(&rows, chart)?;
     }
     Ok(table(&rows) + &verdict(&rows))
+}
+
+/// One cachert render of the peer scene (`text`, read as if from `ref_path`) at a placement, budget and seed:
+/// the image, its [CPU, wall] seconds (scene loading included) and the [cache, shading] split of the wall time.
+fn render_cachert(
+    text: &str,
+    ref_path: &Path,
+    placement: &str,
+    caches: usize,
+    seed: u64,
+    threads: usize,
+) -> Result<(Image, [f64; 2], [Option<f64>; 2])> {
+    let settings = RenderSettings {
+        seed,
+        threads: Some(threads),
+        set: vec![("placement".into(), placement.into()), ("caches".into(), caches.to_string())],
+        ..Default::default()
+    };
+    let (cpu0, t) = (process_cpu_secs().unwrap_or(0.0), Instant::now());
+    let loaded = load_str(text, ref_path, LoadOptions::default())?;
+    let out = render(&loaded.scene, loaded.integrator.as_ref(), &settings, &mut Warnings::default())?;
+    let (cpu, wall) = (process_cpu_secs().unwrap_or(0.0) - cpu0, t.elapsed().as_secs_f64());
+    let split = out.cache.as_ref().map(|c| {
+        let t = &c.stats.times;
+        [t.initial_computation + t.adaptive_computation, t.render + t.per_pixel_term]
+    });
+    let split = split.map_or([None, None], |[a, b]| [Some(a), Some(b)]);
+    Ok((out.image, [cpu, wall], split))
 }
 
 fn format_row(r: &PeerRow) -> String {
