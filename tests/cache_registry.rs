@@ -14,7 +14,7 @@ use cachert::application::{Application, Neighbour};
 use cachert::gbuffer::ShadingPoint;
 use cachert::integrator::cache::{self, CacheOverrides, Placement, render_with};
 use cachert::integrator::{RenderOutput, RenderSettings};
-use cachert::parse::integrator::{IntegratorParams, Parameter, markdown_table};
+use cachert::parse::integrator::{IntegratorParams, ParamDef, Parameter, markdown_table};
 use cachert::placement::registry::NAMES;
 use cachert::render::RayCounters;
 use cachert::sampling::{Rng, Stratum};
@@ -32,15 +32,18 @@ struct ZRecord {
     n: glam::Vec3A,
 }
 
+/// The toy's one parameter, declared once: its default and meaning are the table's and the reader's.
+const SCALE: ParamDef<f64> = ParamDef::float("scale", 1.0, "multiplies z");
+
 impl Application for NormalZ {
     const NAME: &'static str = "cachenz";
     const ABOUT: &'static str = "the shading normal's z, interpolated (a test)";
-    const PARAMETERS: &'static [Parameter] = &[Parameter::new("scale", "float", "1", "multiplies z")];
+    const PARAMETERS: &'static [Parameter] = &[SCALE.row];
     type Record = ZRecord;
     type Prepared<'s> = ();
 
     fn from_params(p: &IntegratorParams<'_>, _: &Scene) -> cachert::Result<Self> {
-        Ok(NormalZ { scale: p.float_or("scale", 1.0)? as f32 })
+        Ok(NormalZ { scale: p.get(&SCALE)? as f32 })
     }
 
     fn prepare(&self, _: &Scene, _: &mut Warnings) -> cachert::Result<()> {

@@ -266,7 +266,7 @@ fn enormous_numeric_parameters_are_refused() {
             Err(e) => e.to_string(),
             Ok(l) => {
                 let named = l.integrator.expect("the integrator is kept");
-                let params = IntegratorParams::new(&named.params, &[]);
+                let params = IntegratorParams::new("ambientocclusion", &named.params, &[]);
                 match AmbientOcclusion::from_params(&params, &l.scene.sampler, false) {
                     Ok(_) => panic!("nsamples {n} accepted"),
                     Err(e) => e.to_string(),

@@ -142,7 +142,7 @@ fn per_pixel_goldens_match_pbrt_v3() {
 /// The largest error of a cache-based golden against its own `none` golden, per application and scene:
 /// RMSE relative to the mean of `none`, mean HDR-FLIP, and the relative difference of the means. Each bound
 /// is about 1.5× the largest measured over the eight placements when the goldens were re-recorded at the
-/// code of issue 39 (64×48, 500 caches, the applications' QUICK settings; VGC's σ_a from the cache
+/// code of issue 39 (64×48, 500 caches, the applications' quick settings; VGC's σ_a from the cache
 /// density); the measured figures are in the comments, placement in brackets. A golden that is silently
 /// wrong by a visible amount exceeds them. The spheres' indirect light is dim and varies fast, so their
 /// irradiance-caching bound stays near the old 0.55.

@@ -8,7 +8,7 @@
 //! bounds of its own per-sample reference (`none`) stated per case and application in [`BOUNDS`]: a relative
 //! RMSE and a factor around the reference's mean, which a black image or a NaN fails in every case.
 //!
-//! The scenes are 32×24 pixels with the applications' QUICK settings (`Application::QUICK`), so the whole
+//! The scenes are 32×24 pixels with the applications' quick settings (`Study::quick` of `Application::STUDY`), so the whole
 //! file runs in seconds. The long sweeps over real scenes (seed stability, the map of where each placement
 //! loses to IM) run through `cachert experiment`; their results are in results/stability.
 
@@ -69,7 +69,7 @@ fn base() -> String {
     scene(&camera([0.0, -6.0, 2.5], [0.0, 0.5, 0.8]), &base_world())
 }
 
-/// Renders `text` with application `app` (its QUICK settings), `placement`, `caches` and `set`, seed 5.
+/// Renders `text` with application `app` (its quick settings), `placement`, `caches` and `set`, seed 5.
 fn run(text: &str, app: &Entry, placement: &str, caches: usize, set: &[(&str, &str)]) -> cachert::Result<RenderOutput> {
     let loaded = load_str(text, Path::new("stability.pbrt"), LoadOptions::default())?;
     let mut all: Vec<(String, String)> = app.quick.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();

@@ -448,7 +448,7 @@ impl Target {
                 // The render stage's reading of the integrator's parameters (sample counts, distances).
                 match &loaded.integrator {
                     Some(named) if named.name == "ambientocclusion" => {
-                        let params = IntegratorParams::new(&named.params, &[]);
+                        let params = IntegratorParams::new(&named.name, &named.params, &[]);
                         AmbientOcclusion::from_params(&params, &loaded.scene.sampler, false)
                             .map(drop)
                             .map_err(|e| e.to_string())

@@ -16,16 +16,16 @@
 
 use glam::Vec3A;
 
-use crate::error::{Error, Result, Warnings};
+use crate::error::{Result, Warnings};
 use crate::gbuffer::ShadingPoint;
-use crate::parse::integrator::{IntegratorParams, Parameter, json_f32};
+use crate::parse::integrator::{IntegratorParams, ParamDef, Parameter, Valid, json_f32};
 use crate::sampling::warp::equal_area_hemisphere;
 use crate::sampling::{Frame, Rng, Stratum};
 use crate::scene::Scene;
 use crate::scene::accel::OccluderHint;
 use crate::scene::ray::{Ray, RayCounters, offset_ray_origin};
 
-use super::{Application, Baseline, Neighbour, PerSample};
+use super::{Application, Baseline, Neighbour, PerSample, Study};
 
 /// A visibility cache: one bit per gathering direction and the AO value.
 #[derive(Clone, Debug, PartialEq)]
@@ -45,6 +45,13 @@ pub struct CacheAo {
     pub max_distance: f32,
 }
 
+/// `gather`: the side n of the gathering grid.
+pub const GATHER: ParamDef<i64> =
+    ParamDef::int("gather", 32, "gathering grid side: gather² rays per cache").between(1, 256);
+/// `maxdistance`: the occlusion ray length (default 0.1 · L, unbounded in a scene of no size).
+pub const MAX_DISTANCE: ParamDef<f64> =
+    ParamDef::computed("maxdistance", "0.1 · L", "occlusion ray length").valid(Valid::Positive { finite: true });
+
 impl CacheAo {
     /// Gathers along an `n`×`n` grid (n = 32 in the paper: 1024 rays), rays of length `max_distance`.
     pub fn new(n: usize, max_distance: f32) -> Self {
@@ -55,6 +62,19 @@ impl CacheAo {
             .collect();
         let cos_sum = dirs.iter().map(|d| d.z).sum();
         CacheAo { dirs, cos_sum, max_distance }
+    }
+
+    /// pbrt-v3's `ambientocclusion` with the same ray length and cosine sampling, divided by π.
+    fn baselines(&self) -> Vec<Baseline> {
+        // The per-pixel integrator needs a finite length: 1e30 is "unbounded" for any scene.
+        let d = if self.max_distance.is_finite() { self.max_distance.to_string() } else { "1e30".into() };
+        vec![Baseline {
+            label: "ao",
+            integrator: "ambientocclusion",
+            set: vec![("maxdistance".into(), d), ("cossample".into(), "true".into())],
+            samples: "nsamples",
+            scale: std::f32::consts::FRAC_1_PI,
+        }]
     }
 
     /// Number of gathering directions.
@@ -91,27 +111,20 @@ impl CacheAo {
 impl Application for CacheAo {
     const NAME: &'static str = "cacheao";
     const ABOUT: &'static str = "cache-based ambient occlusion (visibility caches), AO in [0, 1]";
-    const PARAMETERS: &'static [Parameter] = &[
-        Parameter::new("gather", "integer", "32", "gathering grid side: gather² rays per cache"),
-        Parameter::new("maxdistance", "float", "0.1 · L", "occlusion ray length"),
-    ];
+    const PARAMETERS: &'static [Parameter] = &[GATHER.row, MAX_DISTANCE.row];
 
-    /// gather² directions about the shading normal at every sub-pixel sample.
-    const PER_SAMPLE: Option<PerSample> = Some(PerSample { count: "gather", set: &[] });
+    /// gather² directions about the shading normal at every sub-pixel sample; pbrt-v3's `ambientocclusion`.
+    const STUDY: Study<Self> =
+        Study { quick: &[], per_sample: Some(PerSample { count: "gather", set: &[] }), baselines: CacheAo::baselines };
 
     type Record = VisibilityRecord;
     type Prepared<'s> = &'s Scene;
 
     fn from_params(p: &IntegratorParams<'_>, scene: &Scene) -> Result<Self> {
-        let bad = |name: &str, what: String| Error::usage(format!("{}{}: \"{name}\" {what}", p.at(name), Self::NAME));
-        let gather = p.int_or("gather", 32)?;
-        if !(1..=256).contains(&gather) {
-            return Err(bad("gather", format!("must be between 1 and 256, got {gather}")));
-        }
+        let gather = p.get(&GATHER)?;
         let l = scene.diagonal();
-        let max_distance = match p.float("maxdistance")? {
-            Some(v) if v > 0.0 && v.is_finite() => v as f32,
-            Some(v) => return Err(bad("maxdistance", format!("must be positive, got {v}"))),
+        let max_distance = match p.get_opt(&MAX_DISTANCE)? {
+            Some(v) => v as f32,
             None if l > 0.0 => 0.1 * l,
             None => f32::INFINITY,
         };
@@ -125,19 +138,6 @@ impl Application for CacheAo {
     fn settings(&self) -> Vec<(&'static str, serde_json::Value)> {
         let n = (self.dirs.len() as f64).sqrt().round() as u64;
         vec![("gather", n.into()), ("maxdistance", json_f32(self.max_distance))]
-    }
-
-    /// pbrt-v3's `ambientocclusion` with the same ray length and cosine sampling, divided by π.
-    fn baselines(&self) -> Vec<Baseline> {
-        // The per-pixel integrator needs a finite length: 1e30 is "unbounded" for any scene.
-        let d = if self.max_distance.is_finite() { self.max_distance.to_string() } else { "1e30".into() };
-        vec![Baseline {
-            label: "ao",
-            integrator: "ambientocclusion",
-            set: vec![("maxdistance".into(), d), ("cossample".into(), "true".into())],
-            samples: "nsamples",
-            scale: std::f32::consts::FRAC_1_PI,
-        }]
     }
 
     fn compute_record(

@@ -30,8 +30,7 @@ use glam::Vec3A;
 
 use crate::error::{Error, Result, Warnings};
 use crate::gbuffer::ShadingPoint;
-use crate::parse::integrator::MAX_DEPTH;
-use crate::parse::integrator::{IntegratorParams, Parameter};
+use crate::parse::integrator::{Choice, IntegratorParams, MAX_DEPTH, ParamDef, Parameter};
 use crate::sampling::warp::equal_area_hemisphere;
 use crate::sampling::{Frame, Rng, Stratum};
 use crate::scene::Scene;
@@ -43,7 +42,7 @@ use crate::shading::light::LightSelect;
 use crate::shading::lighting::{PassThrough, ShadePoint, Shading, estimate_direct};
 use crate::shading::{Spectrum, luminance};
 
-use super::{Application, Neighbour, PerPixelTerm, PerSample};
+use super::{Application, CachePlan, Neighbour, PerPixelTerm, PerSample, Study};
 
 /// Samples of the fixed set that estimates ρ_hd of non-Lambertian lobes (an 8×8 stratified grid).
 const RHO_SIDE: usize = 8;
@@ -65,6 +64,30 @@ impl Output {
         }
     }
 }
+
+/// `gather`: the side n of the gathering grid.
+pub const GATHER: ParamDef<i64> =
+    ParamDef::int("gather", 64, "gathering grid side: gather² paths per cache").between(1, 256);
+/// `maxdepth`: the vertices of a gathering path that sample a light.
+pub const MAXDEPTH: ParamDef<i64> = ParamDef::int(
+    "maxdepth",
+    3,
+    "path vertices that sample a light (pbrt-v2's maxindirectdepth; = pbrt-v3 path maxdepth − 1)",
+)
+.between(0, MAX_DEPTH);
+/// `output`: what the image holds.
+pub const OUTPUT: Choice<Output> = Choice::new(
+    "output",
+    "indirect",
+    &[("indirect", Output::Indirect), ("full", Output::Full)],
+    "indirect: cached indirect light only; full: plus emission and directlighting per pixel",
+);
+/// `rejectinfront`: Ward's test.
+pub const REJECT_IN_FRONT: ParamDef<bool> = ParamDef::bool(
+    "rejectinfront",
+    true,
+    "leave out caches in front of the sample's tangent plane (Ward's test); false: Eq. 5 alone",
+);
 
 /// An irradiance cache: E and, while placement needs it, the luminance of each gathering direction.
 #[derive(Clone, Debug, PartialEq)]
@@ -257,52 +280,21 @@ fn diffuse_reflectance(bsdf: &Bsdf, wo: Vec3A, u: &[[f32; 2]]) -> Spectrum {
 impl Application for IrradianceCache {
     const NAME: &'static str = "irradiancecache";
     const ABOUT: &'static str = "irradiance caching: indirect diffuse light ρ_hd·E/π from gathered irradiance";
-    const PARAMETERS: &'static [Parameter] = &[
-        Parameter::new("gather", "integer", "64", "gathering grid side: gather² paths per cache"),
-        Parameter::new(
-            "maxdepth",
-            "integer",
-            "3",
-            "path vertices that sample a light (pbrt-v2's maxindirectdepth; = pbrt-v3 path maxdepth − 1)",
-        ),
-        Parameter::new(
-            "output",
-            "string",
-            "indirect",
-            "indirect: cached indirect light only; full: plus emission and directlighting per pixel",
-        ),
-        Parameter::new(
-            "rejectinfront",
-            "bool",
-            "true",
-            "leave out caches in front of the sample's tangent plane (Ward's test); false: Eq. 5 alone",
-        ),
-    ];
+    const PARAMETERS: &'static [Parameter] = &[GATHER.row, MAXDEPTH.row, OUTPUT.row, REJECT_IN_FRONT.row];
 
     const PAPER_CACHES: usize = 40_000;
-    const QUICK: &'static [(&'static str, &'static str)] = &[("gather", "16")];
     /// gather² paths at every sub-pixel sample.
-    const PER_SAMPLE: Option<PerSample> = Some(PerSample { count: "gather", set: &[] });
+    const STUDY: Study<Self> =
+        Study { quick: &[("gather", "16")], per_sample: Some(PerSample { count: "gather", set: &[] }), ..Study::NONE };
 
     type Record = IrradianceRecord;
     type Prepared<'s> = Lit<'s>;
 
     fn from_params(p: &IntegratorParams<'_>, _: &Scene) -> Result<Self> {
-        let bad = |name: &str, what: String| Error::usage(format!("{}{}: \"{name}\" {what}", p.at(name), Self::NAME));
-        let gather = p.int_or("gather", 64)?;
-        if !(1..=256).contains(&gather) {
-            return Err(bad("gather", format!("must be between 1 and 256, got {gather}")));
-        }
-        let max_depth = p.int_or("maxdepth", 3)?;
-        if !(0..=MAX_DEPTH).contains(&max_depth) {
-            return Err(bad("maxdepth", format!("must be between 0 and {MAX_DEPTH}, got {max_depth}")));
-        }
-        let output = match p.string_or("output", "indirect")?.as_str() {
-            "indirect" => Output::Indirect,
-            "full" => Output::Full,
-            other => return Err(bad("output", format!("must be \"indirect\" or \"full\", got \"{other}\""))),
-        };
-        let reject_in_front = p.bool_or("rejectinfront", true)?;
+        let gather = p.get(&GATHER)?;
+        let max_depth = p.get(&MAXDEPTH)?;
+        let output = p.choice(&OUTPUT)?;
+        let reject_in_front = p.get(&REJECT_IN_FRONT)?;
         Ok(IrradianceCache { reject_in_front, ..IrradianceCache::new(gather as usize, max_depth as u32, output) })
     }
 
@@ -333,9 +325,11 @@ impl Application for IrradianceCache {
         vec![("lights", cx.shading.lights.len().into())]
     }
 
-    /// `output full`: pbrt-v3's `directlighting` with its defaults.
-    fn per_pixel_term(&self) -> Option<PerPixelTerm> {
-        (self.output == Output::Full).then(|| PerPixelTerm { integrator: "directlighting", set: Vec::new() })
+    /// `output full` adds pbrt-v3's `directlighting` with its defaults.
+    fn plan(&self) -> CachePlan {
+        let added_per_pixel =
+            (self.output == Output::Full).then(|| PerPixelTerm { integrator: "directlighting", set: Vec::new() });
+        CachePlan { added_per_pixel, ..CachePlan::default() }
     }
 
     fn compute_record(

@@ -13,6 +13,24 @@
 //! irradiance caching the lights, materials and textures) and every other call reads that, so the cache
 //! driver never needs to know what an application shades with.
 //!
+//! The trait is what the cache driver needs, plus one value for the studies:
+//! - *identity and parameters*: `NAME`, `ABOUT`, `PARAMETERS` (each declared once as a
+//!   `parse::integrator::ParamDef`, read with its typed getters), and `PAPER_CACHES`, which stays on the trait
+//!   because the driver's default budget `caches` scales it;
+//! - *the records*: `from_params`, `prepare`, `compute_record`, `diff`, `finish_record`, `shade`,
+//!   `reference`, `record_bytes`, `record_bytes_bound`, and the `--stats` report (`settings`,
+//!   `prepared_report`);
+//! - [`Application::plan`]: a [`CachePlan`], what these settings ask of the driver beyond caches. It holds the
+//!   three hooks that each served one application, now generic fields named for what the driver does:
+//!   `DGS_GEOMETRY` became `dgs_geometry` (importance caching: off), `without_caches` became
+//!   `shade_by_reference` (importance caching's `sampling uniform|power`), `per_pixel_term` became
+//!   `added_per_pixel` (irradiance caching's `output full`). They depend on the settings (or may), so they are
+//!   one value made from the resolved application rather than three trait items.
+//! - [`Application::STUDY`]: a [`Study`], what the studies (goldens, experiments, stability tests) know of the
+//!   application and the driver never reads: `QUICK` became `Study::quick`, `PER_SAMPLE` became
+//!   `Study::per_sample`, and `baselines()` became `Study::baselines`, a function of the resolved application.
+//!   The registry copies the data into its [`registry::Entry`], so the studies read it by name.
+//!
 //! Depends on `scene`, `gbuffer`, `sampling`, `shading` (its estimators in `shading::lighting`) and the
 //! parameter reader `parse::integrator`; never on `placement` or the cache driver.
 
@@ -73,15 +91,64 @@ pub struct PerSample {
     pub set: &'static [(&'static str, &'static str)],
 }
 
-/// A per-pixel integrator whose image is added to the cached one (irradiance caching's `output full`: the
-/// emitted and direct light that the caches, holding indirect light only, leave out). It renders with the
-/// scene's Sampler and PixelFilter, as it would on its own.
+/// A per-pixel integrator whose image is added to the cached one ([`CachePlan::added_per_pixel`]). It
+/// renders with the scene's Sampler and PixelFilter, as it would on its own.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PerPixelTerm {
     /// The per-pixel integrator's name (`directlighting`).
     pub integrator: &'static str,
     /// Its parameters.
     pub set: Vec<(String, String)>,
+}
+
+/// What a cache-based render with an application's settings asks of the cache driver beyond placing caches
+/// and shading from them ([`Application::plan`]). Every field is generic — any application may ask for it —
+/// and the default asks for nothing.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CachePlan {
+    /// Whether the `vgc+dgs` placement's discontinuity map has the geometry term G′ (Eq. 3) beside the
+    /// record differences (the ablations `vgc+dgs:diff` and `vgc+dgs:geom` fix their terms whatever this
+    /// says). Importance caching turns it off: the paper found it does better without.
+    pub dgs_geometry: bool,
+    /// `Some(why)` when these settings are a per-sample estimator that reads no caches: the driver places
+    /// none, shades every sample with [`Application::reference`] whatever the placement, and notes `why`
+    /// (importance caching's many-light baselines, `sampling uniform` or `power`).
+    pub shade_by_reference: Option<String>,
+    /// A per-pixel integrator whose image the driver adds to the cached one and to the per-sample reference
+    /// (irradiance caching's `output full`: the emitted and direct light that its caches, holding indirect
+    /// light only, leave out).
+    pub added_per_pixel: Option<PerPixelTerm>,
+}
+
+impl Default for CachePlan {
+    fn default() -> Self {
+        CachePlan { dgs_geometry: true, shade_by_reference: None, added_per_pixel: None }
+    }
+}
+
+/// What the studies know of an application and the cache driver never reads ([`Application::STUDY`]): the
+/// golden matrix and the stability tests render with `quick`; experiments chart `per_sample` and the
+/// `baselines` beside the cache methods.
+#[derive(Debug)]
+pub struct Study<A> {
+    /// Parameter settings (`--set` pairs) that make a small render (64×48, the default budget) take about
+    /// a second on two cores with the same estimator — fewer gather directions or light samples, never a
+    /// different method.
+    pub quick: &'static [(&'static str, &'static str)],
+    /// The per-pixel form of the application's own estimator at a given sample count, if it has one.
+    pub per_sample: Option<PerSample>,
+    /// The per-pixel integrators computing the same image as the resolved application (none, one, or
+    /// several compared side by side); the first is the one an experiment renders converged.
+    pub baselines: fn(&A) -> Vec<Baseline>,
+}
+
+impl<A> Study<A> {
+    /// No quick settings, no per-sample form, no baselines.
+    pub const NONE: Self = Study { quick: &[], per_sample: None, baselines: no_baselines::<A> };
+}
+
+fn no_baselines<A>(_: &A) -> Vec<Baseline> {
+    Vec::new()
 }
 
 /// A cache-based rendering application.
@@ -103,19 +170,8 @@ pub trait Application: Sync + Sized {
     /// `caches` scales it to the image's pixels.
     const PAPER_CACHES: usize = 120_000;
 
-    /// Whether the `vgc+dgs` placement's discontinuity map has the geometry term G′ (Eq. 3) beside the
-    /// record differences: the paper's finding is that importance caching does better without it. The
-    /// ablations `vgc+dgs:diff` and `vgc+dgs:geom` fix their terms whatever this says.
-    const DGS_GEOMETRY: bool = true;
-
-    /// Parameter settings (`--set` pairs) that make a small render (64×48, the default budget) take about a
-    /// second on two cores with the same estimator — fewer gather directions or light samples, never a
-    /// different method. The golden matrix and the stability tests render with them.
-    const QUICK: &'static [(&'static str, &'static str)] = &[];
-
-    /// The per-pixel form of the application's own estimator at a given sample count, if it has one
-    /// (experiments chart it beside the cache methods).
-    const PER_SAMPLE: Option<PerSample> = None;
+    /// What the studies know of the application (the cache driver never reads it).
+    const STUDY: Study<Self> = Study::NONE;
 
     /// What one cache stores.
     type Record: Send + Sync;
@@ -124,7 +180,8 @@ pub trait Application: Sync + Sized {
     /// from it once (lights, materials, textures). Made by [`Application::prepare`].
     type Prepared<'s>: Sync;
 
-    /// Reads exactly the parameters of [`Application::PARAMETERS`] (a bad value is an error naming it).
+    /// Reads exactly the parameters of [`Application::PARAMETERS`] with the typed getters of
+    /// `IntegratorParams` (a bad value is an error naming it).
     fn from_params(p: &IntegratorParams<'_>, scene: &Scene) -> Result<Self>;
 
     /// Prepares what the application reads from `scene` while rendering; problems that do not stop it (a
@@ -142,22 +199,9 @@ pub trait Application: Sync + Sized {
         Vec::new()
     }
 
-    /// The per-pixel integrators computing the same image (none, one, or several compared side by side);
-    /// the first is the one an experiment renders converged.
-    fn baselines(&self) -> Vec<Baseline> {
-        Vec::new()
-    }
-
-    /// The per-pixel integrator whose image is added to the cached one, if any (the cached image and the
-    /// per-sample reference alike).
-    fn per_pixel_term(&self) -> Option<PerPixelTerm> {
-        None
-    }
-
-    /// `Some(why)` when these settings render without caches (a per-sample baseline): the driver then
-    /// shades every sample with [`Application::reference`] whatever the placement, and says why.
-    fn without_caches(&self) -> Option<String> {
-        None
+    /// What these settings ask of the driver beyond caches (the default: nothing; see [`CachePlan`]).
+    fn plan(&self) -> CachePlan {
+        CachePlan::default()
     }
 
     /// Evaluates the expensive shading function at a cache site: the value and the per-sample gathering
@@ -196,7 +240,7 @@ pub trait Application: Sync + Sized {
     ) -> [f32; 3];
 
     /// The brute-force answer at one sample: what the caches approximate (references, goldens); a
-    /// per-sample baseline's estimate when [`Application::without_caches`] says so (`stratum` as for
+    /// per-sample estimator's when [`CachePlan::shade_by_reference`] says so (`stratum` as for
     /// [`Application::shade`]).
     fn reference(
         &self,

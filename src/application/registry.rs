@@ -13,7 +13,7 @@ use super::irradiance::IrradianceCache;
 use super::{Application, PerSample};
 
 /// What is known about a registered application without its type: name, summary, parameter table.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Entry {
     /// The integrator name (`Application::NAME`).
     pub name: &'static str,
@@ -21,11 +21,11 @@ pub struct Entry {
     pub about: &'static str,
     /// Its own parameters (`Application::PARAMETERS`).
     pub parameters: &'static [Parameter],
-    /// Settings for small, fast renders (`Application::QUICK`).
+    /// Settings for small, fast renders (`Study::quick` of `Application::STUDY`).
     pub quick: &'static [(&'static str, &'static str)],
     /// The paper's budget at 1920×1080 (`Application::PAPER_CACHES`).
     pub paper_caches: usize,
-    /// Its own estimator per pixel (`Application::PER_SAMPLE`).
+    /// Its own estimator per pixel (`Study::per_sample` of `Application::STUDY`).
     pub per_sample: Option<PerSample>,
 }
 
@@ -36,9 +36,9 @@ impl Entry {
             name: A::NAME,
             about: A::ABOUT,
             parameters: A::PARAMETERS,
-            quick: A::QUICK,
+            quick: A::STUDY.quick,
             paper_caches: A::PAPER_CACHES,
-            per_sample: A::PER_SAMPLE,
+            per_sample: A::STUDY.per_sample,
         }
     }
 }

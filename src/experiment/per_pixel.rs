@@ -43,7 +43,8 @@ impl WithApplication for BaselineOf<'_> {
     fn apply<A: Application>(self) -> Self::Output {
         let empty = ParamList::default();
         let params = self.integrator.filter(|n| n.name == A::NAME).map_or(&empty, |n| &n.params);
-        Ok(A::from_params(&IntegratorParams::new(params, self.set), self.scene)?.baselines())
+        let app = A::from_params(&IntegratorParams::new(A::NAME, params, self.set), self.scene)?;
+        Ok((A::STUDY.baselines)(&app))
     }
 }
 

@@ -1,6 +1,6 @@
 //! The project's own golden matrix (the repository's `golden/` folder), enumerated from the registries: every
 //! placement of `placement::registry` and `none`, × every application of `application::registry` (with its
-//! `QUICK` settings), × the shipped scenes [`SCENES`]; and each per-pixel integrator of
+//! quick settings, `Study::quick`), × the shipped scenes [`SCENES`]; and each per-pixel integrator of
 //! `render::INTEGRATORS` on one scene. Registering a placement or an application adds its entries here; the
 //! goldens themselves are made by `cachert golden update --matrix`, and a test fails while any is missing.
 //!

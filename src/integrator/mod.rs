@@ -111,10 +111,10 @@ pub fn render(
             registry::names()
         )));
     }
-    let iparams = IntegratorParams::new(params, &settings.set);
+    let iparams = IntegratorParams::new(name, params, &settings.set);
     let pixel = per_pixel_integrator(name, &iparams, scene, &sampler, settings.quick, warnings)?
         .ok_or_else(|| not_implemented(name))?;
-    iparams.check_overrides(name)?;
+    iparams.check_overrides()?;
     report_unused(integrator, name, &settings.set, warnings);
     let run = || render_image(scene, &sampler, pixel.as_ref(), settings.seed, settings.progress);
     let (image, rays, render_secs) = with_threads(settings.threads, run)?;
@@ -136,7 +136,7 @@ pub(crate) fn render_per_pixel_term(
         sampler.spp = spp;
     }
     let empty = ParamList::default();
-    let iparams = IntegratorParams::new(&empty, set);
+    let iparams = IntegratorParams::new(name, &empty, set);
     let pixel = per_pixel_integrator(name, &iparams, scene, &sampler, settings.quick, warnings)?
         .ok_or_else(|| not_implemented(name))?;
     Ok(render_image(scene, &sampler, pixel.as_ref(), settings.seed, settings.progress))

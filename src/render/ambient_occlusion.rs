@@ -8,7 +8,7 @@
 
 use glam::Vec3A;
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::sampling::Frame;
 use crate::sampling::warp::{
     UNIFORM_HEMISPHERE_PDF, cosine_hemisphere_batch, cosine_hemisphere_pdf, uniform_hemisphere,
@@ -19,17 +19,11 @@ use crate::scene::ray::{Ray, offset_ray_origin};
 use crate::scene::sampler::SamplerSpec;
 
 use super::{PixelIntegrator, RayCounters};
-use crate::parse::integrator::IntegratorParams;
+use crate::parse::integrator::{IntegratorParams, ParamDef, Parameter, Valid};
 use crate::sampling::pixel_samples::PixelSamples;
 use crate::shading::lighting::Scratch;
 
-/// Settings of the `ambientocclusion` integrator.
-///
-/// | parameter | type | default | meaning |
-/// |---|---|---|---|
-/// | `nsamples` | integer | 64 | occlusion rays per camera sample (rounded as the sampler rounds arrays) |
-/// | `cossample` | bool | true | cosine-weighted directions (else uniform over the hemisphere) |
-/// | `maxdistance` | float | ∞ | shadow-ray length (pbrt-v4's parameter) |
+/// Settings of the `ambientocclusion` integrator: the parameters of [`PARAMETERS`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AmbientOcclusion {
     /// Occlusion rays per camera sample.
@@ -43,28 +37,31 @@ pub struct AmbientOcclusion {
 /// Largest `nsamples` accepted.
 pub const MAX_AO_SAMPLES: i64 = 1 << 20;
 
+/// `nsamples`.
+pub const NSAMPLES: ParamDef<i64> =
+    ParamDef::int("nsamples", 64, "occlusion rays per camera sample (rounded as the sampler rounds arrays)")
+        .between(1, MAX_AO_SAMPLES);
+/// `cossample`.
+pub const COSSAMPLE: ParamDef<bool> =
+    ParamDef::bool("cossample", true, "cosine-weighted directions (else uniform over the hemisphere)");
+/// `maxdistance` (unbounded by default).
+pub const MAXDISTANCE: ParamDef<f64> =
+    ParamDef::float("maxdistance", f64::INFINITY, "shadow-ray length (pbrt-v4's parameter)")
+        .valid(Valid::Positive { finite: false });
+
+/// The parameters of `ambientocclusion`.
+pub const PARAMETERS: &[Parameter] = &[NSAMPLES.row, COSSAMPLE.row, MAXDISTANCE.row];
+
 /// Most surfaces without a material a camera ray passes through before it gives up.
 const MAX_PASS_THROUGH: usize = 1024;
 
 impl AmbientOcclusion {
     /// Reads the integrator's parameters; `quick` sets nsamples to 1 as pbrt-v3's `--quick` does.
     pub fn from_params(p: &IntegratorParams<'_>, sampler: &SamplerSpec, quick: bool) -> Result<Self> {
-        let n = p.int_or("nsamples", 64)?;
-        if !(1..=MAX_AO_SAMPLES).contains(&n) {
-            let loc = p.at("nsamples");
-            return Err(Error::usage(format!(
-                "{loc}ambientocclusion: \"nsamples\" must be between 1 and {MAX_AO_SAMPLES}, got {n}"
-            )));
-        }
-        let max_distance = p.float_or("maxdistance", f64::INFINITY)? as f32;
-        if max_distance.is_nan() || max_distance <= 0.0 {
-            let loc = p.at("maxdistance");
-            return Err(Error::usage(format!(
-                "{loc}ambientocclusion: \"maxdistance\" must be positive, got {max_distance}"
-            )));
-        }
+        let n = p.get(&NSAMPLES)?;
+        let max_distance = p.get(&MAXDISTANCE)? as f32;
         let n = if quick { 1 } else { sampler.round_count(n as u32) };
-        Ok(AmbientOcclusion { n_samples: n, cos_sample: p.bool_or("cossample", true)?, max_distance })
+        Ok(AmbientOcclusion { n_samples: n, cos_sample: p.get(&COSSAMPLE)?, max_distance })
     }
 
     /// AO at a surface point seen along `wo_dir` (the incoming ray direction), with `u` one 2-D sample per

@@ -15,7 +15,7 @@ use crate::shading::bxdf::BxdfFlags;
 use crate::shading::light::LightSelect;
 
 use super::{PixelIntegrator, RayCounters};
-use crate::parse::integrator::{IntegratorParams, MAX_DEPTH};
+use crate::parse::integrator::{IntegratorParams, MAX_DEPTH, ParamDef, Parameter};
 use crate::sampling::pixel_samples::PixelSamples;
 use crate::shading::lighting::Scratch;
 use crate::shading::lighting::{ShadePoint, Shading, sample_all_lights, sample_one_light};
@@ -32,12 +32,17 @@ pub enum Strategy {
     One,
 }
 
-/// pbrt-v3's `directlighting` integrator.
-///
-/// | parameter | type | default | meaning |
-/// |---|---|---|---|
-/// | `strategy` | string | all | `all`: every light with its nsamples; `one`: one light chosen uniformly |
-/// | `maxdepth` | integer | 5 | specular bounces followed |
+/// `strategy`: every light, or one chosen uniformly (an unknown name is a warning and means `all`, as in
+/// pbrt-v3).
+pub const STRATEGY: ParamDef<String> =
+    ParamDef::text("strategy", "all", "`all`: every light with its nsamples; `one`: one light chosen uniformly");
+/// `maxdepth`: the specular bounces followed (`path` reads it as its bounces).
+pub const MAXDEPTH: ParamDef<i64> = ParamDef::int("maxdepth", 5, "specular bounces followed").between(0, MAX_DEPTH);
+
+/// The parameters of `directlighting` (the README's table).
+pub const PARAMETERS: &[Parameter] = &[STRATEGY.row, MAXDEPTH.row];
+
+/// pbrt-v3's `directlighting` integrator: the parameters of [`PARAMETERS`].
 pub struct DirectLighting<'a> {
     shading: Shading<'a>,
     strategy: Strategy,
@@ -56,8 +61,8 @@ impl<'a> DirectLighting<'a> {
         quick: bool,
         warnings: &mut Warnings,
     ) -> Result<Self> {
-        let max_depth = read_max_depth(p, "directlighting")?;
-        let strategy = match p.string_or("strategy", "all")?.as_str() {
+        let max_depth = p.get(&MAXDEPTH)? as u32;
+        let strategy = match p.get(&STRATEGY)?.as_str() {
             "all" => Strategy::All,
             "one" => Strategy::One,
             other => {
@@ -140,18 +145,6 @@ impl<'a> DirectLighting<'a> {
         let li = self.radiance(scene, x.si.spawn_ray(bs.wi), depth + 1, bsdfs, s, scratch, c);
         bs.f * li * cos / bs.pdf
     }
-}
-
-/// Reads `maxdepth` (default 5) and checks its range.
-pub fn read_max_depth(p: &IntegratorParams<'_>, integrator: &str) -> Result<u32> {
-    let d = p.int_or("maxdepth", 5)?;
-    if !(0..=MAX_DEPTH).contains(&d) {
-        return Err(Error::usage(format!(
-            "{}{integrator}: \"maxdepth\" must be between 0 and {MAX_DEPTH}, got {d}",
-            p.at("maxdepth")
-        )));
-    }
-    Ok(d as u32)
 }
 
 impl PixelIntegrator for DirectLighting<'_> {

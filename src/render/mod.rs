@@ -14,7 +14,7 @@ mod pixels;
 pub use pixels::render_image;
 
 use crate::error::{Error, Result, Warnings};
-use crate::parse::integrator::IntegratorParams;
+use crate::parse::integrator::{IntegratorParams, Parameter};
 use crate::sampling::pixel_samples::PixelSamples;
 use crate::scene::Scene;
 use crate::scene::ray::Ray;
@@ -38,6 +38,10 @@ pub trait PixelIntegrator: Sync {
 /// The per-pixel integrators cachert implements, by scene-file name (the cache-based ones are the
 /// applications of `application::registry`, rendered by `integrator::cache`).
 pub const INTEGRATORS: &[&str] = &["ambientocclusion", "directlighting", "path"];
+
+/// Each per-pixel integrator of [`INTEGRATORS`] with its parameter table.
+pub const PARAMETERS: &[(&str, &[Parameter])] =
+    &[("ambientocclusion", ao::PARAMETERS), ("directlighting", directlighting::PARAMETERS), ("path", path::PARAMETERS)];
 
 /// The per-pixel integrator named `name` with parameters `p`, or `None` when no per-pixel integrator has
 /// that name (the caller knows the cache-based names too, and says so).

@@ -8,27 +8,33 @@
 //!
 //! A per-pixel reference for the cache applications; depends on `scene`, `shading` and `shading::lighting`.
 
-use crate::error::{Error, Result, Warnings};
+use crate::error::{Result, Warnings};
 use crate::scene::Scene;
 use crate::scene::ray::Ray;
 use crate::shading::Spectrum;
 use crate::shading::bxdf::BxdfFlags;
 use crate::shading::light::{LightSelect, SpatialSelect};
 
-use super::directlighting::read_max_depth;
 use super::{PixelIntegrator, RayCounters};
-use crate::parse::integrator::IntegratorParams;
+use crate::parse::integrator::{IntegratorParams, ParamDef, Parameter, Valid};
 use crate::sampling::pixel_samples::PixelSamples;
 use crate::shading::lighting::Scratch;
 use crate::shading::lighting::{PassThrough, ShadePoint, Shading, sample_one_light};
 
-/// pbrt-v3's `path` integrator.
-///
-/// | parameter | type | default | meaning |
-/// |---|---|---|---|
-/// | `maxdepth` | integer | 5 | bounces |
-/// | `rrthreshold` | float | 1 | Russian roulette when the path throughput's largest channel is below this |
-/// | `lightsamplestrategy` | string | spatial | `uniform`, `power` or `spatial` (per-voxel light probabilities) |
+/// `maxdepth`: bounces (declared by `directlighting`, the same default and range).
+pub const MAXDEPTH: ParamDef<i64> = super::directlighting::MAXDEPTH.meaning("bounces");
+/// `rrthreshold`.
+pub const RRTHRESHOLD: ParamDef<f64> =
+    ParamDef::float("rrthreshold", 1.0, "Russian roulette when the path throughput's largest channel is below this")
+        .valid(Valid::AtLeast { lo: 0.0, finite: false });
+/// `lightsamplestrategy` (an unknown name is a warning and means `spatial`, as in pbrt-v3).
+pub const LIGHTSAMPLESTRATEGY: ParamDef<String> =
+    ParamDef::text("lightsamplestrategy", "spatial", "`uniform`, `power` or `spatial` (per-voxel light probabilities)");
+
+/// The parameters of `path` (the README's table).
+pub const PARAMETERS: &[Parameter] = &[MAXDEPTH.row, RRTHRESHOLD.row, LIGHTSAMPLESTRATEGY.row];
+
+/// pbrt-v3's `path` integrator: the parameters of [`PARAMETERS`].
 pub struct Path<'a> {
     shading: Shading<'a>,
     max_depth: u32,
@@ -47,15 +53,9 @@ enum Select {
 impl<'a> Path<'a> {
     /// Reads the parameters and prepares the scene's shading data.
     pub fn from_params(p: &IntegratorParams<'_>, scene: &'a Scene, warnings: &mut Warnings) -> Result<Self> {
-        let max_depth = read_max_depth(p, "path")?;
-        let rr_threshold = p.float_or("rrthreshold", 1.0)? as f32;
-        if rr_threshold.is_nan() || rr_threshold < 0.0 {
-            return Err(Error::usage(format!(
-                "{}path: \"rrthreshold\" must be ≥ 0, got {rr_threshold}",
-                p.at("rrthreshold")
-            )));
-        }
-        let strategy = p.string_or("lightsamplestrategy", "spatial")?;
+        let max_depth = p.get(&MAXDEPTH)? as u32;
+        let rr_threshold = p.get(&RRTHRESHOLD)? as f32;
+        let strategy = p.get(&LIGHTSAMPLESTRATEGY)?;
         let shading = Shading::build(scene, true, warnings)?;
         let select = match strategy.as_str() {
             "spatial" => Select::Spatial(SpatialSelect::new(scene.bounds())),

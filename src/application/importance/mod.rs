@@ -28,11 +28,14 @@
 //! number of VPL draws per sample, chosen uniformly or in proportion to each VPL's flux), with no caches.
 //!
 //! DGS compares two caches by `Σ_j |F_a[j] − F_b[j]|` and, as the paper found best for importance caching,
-//! without the geometry term ([`Application::DGS_GEOMETRY`]; `vgc+dgs:geom` still has it).
+//! without the geometry term ([`CachePlan::dgs_geometry`]; `vgc+dgs:geom` still has it).
+//!
+//! Its parameters are declared and read in [`params`].
 
 pub mod distribution;
 pub mod lobe;
 pub mod mixture;
+pub mod params;
 pub mod sharp;
 pub mod spheres;
 pub mod visibility;
@@ -49,7 +52,7 @@ use crate::shading::light::LightSelect;
 use crate::shading::lighting::Shading;
 use crate::shading::{Spectrum, luminance};
 
-use super::{Application, Baseline, Neighbour, PerSample};
+use super::{Application, CachePlan, Neighbour, PerSample, Study};
 use distribution::Quantised;
 use lobe::LobeTree;
 use mixture::{LETTERS, LOBE, Mis, Mixture, TECHNIQUES};
@@ -74,9 +77,6 @@ const MAX_TECHNIQUE_DRAWS: u32 = lobe::MAX_DRAWS as u32;
 /// 4.7–5.7× from one to eight draws per technique on each of the three, and 1.3–1.4× more from eight to
 /// sixteen, which doubles the time of an image (the table there).
 pub const DEFAULT_LIGHT_SAMPLES: u32 = 8;
-
-/// Most VPLs a render may ask for (beyond the memory check).
-const MAX_VPLS: i64 = 1 << 26;
 
 /// How a sample chooses its VPLs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -260,198 +260,21 @@ impl Application for ImportanceCache {
     const NAME: &'static str = "importancecache";
     const ABOUT: &'static str =
         "importance caching: light from virtual point lights drawn by MIS from cached distributions";
-    const PARAMETERS: &'static [Parameter] = &[
-        Parameter::new("vpls", "integer", "8192", "virtual point lights (direct and indirect light)"),
-        Parameter::new("vpldepth", "integer", "5", "most surface vertices of a light path"),
-        Parameter::new(
-            "vplseed",
-            "integer",
-            "0",
-            "seed of the VPLs (fixed across --seed, so seeds share one reference)",
-        ),
-        Parameter::new(
-            "clamp",
-            "float",
-            "0.025",
-            "distance clamp d_c as a fraction of L (estimator and reference alike)",
-        ),
-        Parameter::new(
-            "distributions",
-            "string",
-            "fubcg",
-            "techniques that draw, each letter lightsamples draws: f full, u unoccluded, b bounded, c \
-             conservative, g lobe",
-        ),
-        Parameter::new(
-            "lightsamples",
-            "integer",
-            "8",
-            "VPLs each letter of distributions draws per sub-pixel sample (the paper: 1, four light samples per \
-             shading point)",
-        ),
-        Parameter::new("mis", "string", "balance", "combination of the techniques: balance or alphamax"),
-        Parameter::new(
-            "sampling",
-            "string",
-            "cache",
-            "cache: importance caching; uniform or power: many-light baselines without caches",
-        ),
-        Parameter::new(
-            "draws",
-            "integer",
-            "0",
-            "VPLs the uniform and power baselines draw per sample (0: as many as f, u, b and c draw together)",
-        ),
-        Parameter::new(
-            "splitcone",
-            "float",
-            "10",
-            "degrees: VPLs in a sharper reflection lobe's cone, or whose lobe's cone holds the point, are drawn \
-             apart at the shading point by their exact unoccluded light (every sampling; 0: off)",
-        ),
-        Parameter::new(
-            "splitnear",
-            "float",
-            "1",
-            "VPLs closer to the shading point than this many clamp distances d_c are drawn apart there too \
-             (every sampling; 0: off)",
-        ),
-        Parameter::new(
-            "visangle",
-            "float",
-            "10",
-            "degrees: a cache traces only the two ends of a run of VPLs this close together as it sees them, \
-             and takes the run as visible when both are (else traces every member; 0: one ray per VPL)",
-        ),
-        Parameter::new(
-            "lobecone",
-            "float",
-            "45",
-            "degrees: the widest glossy lobe (wider than splitcone) for which the lobe technique g draws a VPL \
-             among those in its cone, by flux times the lobe's falloff over clamped squared distance",
-        ),
-        Parameter::new(
-            "stratify",
-            "bool",
-            "true",
-            "the VPL draws of a pixel's sub-pixel samples are stratified across them (false: independent draws)",
-        ),
-    ];
-    const DGS_GEOMETRY: bool = false;
+    const PARAMETERS: &'static [Parameter] = params::PARAMETERS;
     const PAPER_CACHES: usize = 25_000;
-    const QUICK: &'static [(&'static str, &'static str)] = &[("vpls", "1024")];
-    /// `draws` VPLs drawn by flux at every sub-pixel sample (the VPL sum the reference evaluates whole).
-    const PER_SAMPLE: Option<PerSample> = Some(PerSample { count: "draws", set: &[("sampling", "power")] });
+    /// `draws` VPLs drawn by flux at every sub-pixel sample (the VPL sum the reference evaluates whole); the
+    /// power and uniform baselines.
+    const STUDY: Study<Self> = Study {
+        quick: &[("vpls", "1024")],
+        per_sample: Some(PerSample { count: "draws", set: &[("sampling", "power")] }),
+        baselines: ImportanceCache::baselines,
+    };
 
     type Record = ImportanceRecord;
     type Prepared<'s> = Lit<'s>;
 
     fn from_params(p: &IntegratorParams<'_>, _: &Scene) -> Result<Self> {
-        let bad = |name: &str, what: String| Error::usage(format!("{}{}: \"{name}\" {what}", p.at(name), Self::NAME));
-        let vpls = p.int_or("vpls", 8192)?;
-        if vpls < 1 {
-            return Err(bad("vpls", format!("must be between 1 and {MAX_VPLS}, got {vpls}")));
-        }
-        // What the VPLs alone would occupy (an upper bound: every one with its own BSDF).
-        let need = (vpls as u128 * Vpls::bytes_for(1) as u128).min(u64::MAX as u128) as u64;
-        if vpls > MAX_VPLS {
-            return Err(bad(
-                "vpls",
-                format!("must be between 1 and {MAX_VPLS}, got {vpls} (up to {} of VPLs)", gib(need)),
-            ));
-        }
-        if let Some(avail) = crate::os::available_memory_bytes()
-            && need > avail
-        {
-            return Err(bad(
-                "vpls",
-                format!("{vpls} would need up to {} of memory; {} is available", gib(need), gib(avail)),
-            ));
-        }
-        let max_depth = p.int_or("vpldepth", 5)?;
-        if !(0..=64).contains(&max_depth) {
-            return Err(bad("vpldepth", format!("must be between 0 and 64, got {max_depth}")));
-        }
-        let clamp = p.float_or("clamp", 0.025)?;
-        if !(clamp >= 0.0 && clamp.is_finite()) {
-            return Err(bad("clamp", format!("must be a finite number ≥ 0, got {clamp}")));
-        }
-        let letters = p.string_or("distributions", "fubcg")?;
-        let light_samples = p.int_or("lightsamples", DEFAULT_LIGHT_SAMPLES as i64)?;
-        if !(1..=MAX_TECHNIQUE_DRAWS as i64).contains(&light_samples) {
-            return Err(bad(
-                "lightsamples",
-                format!("must be between 1 and {MAX_TECHNIQUE_DRAWS}, got {light_samples}"),
-            ));
-        }
-        let light_samples = light_samples as u32;
-        let mut techniques = [0u32; TECHNIQUES];
-        for ch in letters.chars() {
-            match LETTERS.iter().position(|&l| l == ch.to_ascii_lowercase()) {
-                Some(t) if techniques[t] + light_samples <= MAX_TECHNIQUE_DRAWS => techniques[t] += light_samples,
-                _ => {
-                    return Err(bad(
-                        "distributions",
-                        format!(
-                            "must be letters of f, u, b, c, g, each drawing at most {MAX_TECHNIQUE_DRAWS} times \
-                             (its count times lightsamples {light_samples}; e.g. \"fubcg\"), got \"{letters}\""
-                        ),
-                    ));
-                }
-            }
-        }
-        if techniques.iter().all(|&n| n == 0) {
-            return Err(bad("distributions", "must name at least one of f, u, b, c, g".into()));
-        }
-        let mis = match p.string_or("mis", "balance")?.as_str() {
-            "balance" => Mis::Balance,
-            "alphamax" => Mis::AlphaMax,
-            other => return Err(bad("mis", format!("must be \"balance\" or \"alphamax\", got \"{other}\""))),
-        };
-        let sampling = match p.string_or("sampling", "cache")?.as_str() {
-            "cache" => Sampling::Cache,
-            "uniform" => Sampling::Uniform,
-            "power" => Sampling::Power,
-            other => {
-                return Err(bad("sampling", format!("must be \"cache\", \"uniform\" or \"power\", got \"{other}\"")));
-            }
-        };
-        let draws = p.int_or("draws", 0)?;
-        if !(0..=1 << 20).contains(&draws) {
-            return Err(bad("draws", format!("must be between 0 and {}, got {draws}", 1 << 20)));
-        }
-        let split_cone = p.float_or("splitcone", 10.0)?;
-        if !(0.0..=90.0).contains(&split_cone) {
-            return Err(bad("splitcone", format!("must be between 0 and 90 degrees, got {split_cone}")));
-        }
-        let split_near = p.float_or("splitnear", 1.0)?;
-        if !(0.0..=100.0).contains(&split_near) {
-            return Err(bad("splitnear", format!("must be between 0 and 100 clamp distances, got {split_near}")));
-        }
-        let vis_angle = p.float_or("visangle", 10.0)?;
-        if !(0.0..=45.0).contains(&vis_angle) {
-            return Err(bad("visangle", format!("must be between 0 and 45 degrees, got {vis_angle}")));
-        }
-        let lobe_cone = p.float_or("lobecone", 45.0)?;
-        if !(0.0..=90.0).contains(&lobe_cone) {
-            return Err(bad("lobecone", format!("must be between 0 and 90 degrees, got {lobe_cone}")));
-        }
-        Ok(ImportanceCache {
-            lobe_cone: lobe_cone as f32,
-            stratify: p.bool_or("stratify", true)?,
-            vis_angle: vis_angle as f32,
-            split_cone: split_cone as f32,
-            split_near: split_near as f32,
-            draws: draws as u32,
-            vpls: vpls as usize,
-            max_depth: max_depth as u32,
-            vpl_seed: p.int_or("vplseed", 0)? as u64,
-            clamp: clamp as f32,
-            techniques,
-            light_samples,
-            mis,
-            sampling,
-        })
+        Self::read(p)
     }
 
     fn prepare<'s>(&self, scene: &'s Scene, warnings: &mut Warnings) -> Result<Lit<'s>> {
@@ -488,34 +311,7 @@ impl Application for ImportanceCache {
     }
 
     fn settings(&self) -> Vec<(&'static str, serde_json::Value)> {
-        vec![
-            ("vpls", self.vpls.into()),
-            ("vpldepth", self.max_depth.into()),
-            ("vplseed", self.vpl_seed.into()),
-            ("clamp", serde_json::Number::from_f64(self.clamp as f64).map_or(serde_json::Value::Null, Into::into)),
-            ("distributions", self.letters().into()),
-            ("lightsamples", self.light_samples.into()),
-            ("mis", if self.mis == Mis::Balance { "balance" } else { "alphamax" }.into()),
-            ("sampling", self.sampling.name().into()),
-            ("draws", self.baseline_draws().into()),
-            (
-                "splitcone",
-                serde_json::Number::from_f64(self.split_cone as f64).map_or(serde_json::Value::Null, Into::into),
-            ),
-            (
-                "splitnear",
-                serde_json::Number::from_f64(self.split_near as f64).map_or(serde_json::Value::Null, Into::into),
-            ),
-            (
-                "visangle",
-                serde_json::Number::from_f64(self.vis_angle as f64).map_or(serde_json::Value::Null, Into::into),
-            ),
-            (
-                "lobecone",
-                serde_json::Number::from_f64(self.lobe_cone as f64).map_or(serde_json::Value::Null, Into::into),
-            ),
-            ("stratify", self.stratify.into()),
-        ]
+        self.settings_report()
     }
 
     /// The VPLs generated (fewer than `vpls` when the lights' paths carry nothing), the light paths traced
@@ -528,38 +324,13 @@ impl Application for ImportanceCache {
         ]
     }
 
-    /// Power sampling, then uniform sampling, with the same VPLs and sub-pixel samples; their sample count
-    /// is `draws` (VPLs per sample), so their pixels integrate the same footprint as the reference's.
-    fn baselines(&self) -> Vec<Baseline> {
-        [Sampling::Power, Sampling::Uniform]
-            .into_iter()
-            .map(|sampling| {
-                let set = [
-                    ("sampling", sampling.name().to_string()),
-                    ("vpls", self.vpls.to_string()),
-                    ("vpldepth", self.max_depth.to_string()),
-                    ("vplseed", self.vpl_seed.to_string()),
-                    ("clamp", self.clamp.to_string()),
-                    ("distributions", self.letters()),
-                    ("splitcone", self.split_cone.to_string()),
-                    ("splitnear", self.split_near.to_string()),
-                ];
-                Baseline {
-                    label: sampling.name(),
-                    integrator: Self::NAME,
-                    set: set.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
-                    samples: "draws",
-                    scale: 1.0,
-                }
-            })
-            .collect()
-    }
-
-    fn without_caches(&self) -> Option<String> {
-        match self.sampling {
+    /// Without the geometry term in DGS (the paper's finding); `sampling uniform` and `power` read no caches.
+    fn plan(&self) -> CachePlan {
+        let shade_by_reference = match self.sampling {
             Sampling::Cache => None,
             s => Some(format!("\"sampling\" \"{}\" draws VPLs without caches", s.name())),
-        }
+        };
+        CachePlan { dgs_geometry: false, shade_by_reference, ..CachePlan::default() }
     }
 
     fn compute_record(&self, cx: &Lit<'_>, at: &ShadingPoint, _: &mut Rng, rays: &mut RayCounters) -> ImportanceRecord {
@@ -683,11 +454,6 @@ impl Application for ImportanceCache {
     }
 }
 
-/// `bytes` in GiB for messages.
-fn gib(bytes: u64) -> String {
-    format!("{:.2} GiB", bytes as f64 / (1u64 << 30) as f64)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -718,6 +484,6 @@ mod tests {
     #[test]
     fn the_parameter_table_gives_the_default_light_samples() {
         let row = ImportanceCache::PARAMETERS.iter().find(|p| p.name == "lightsamples").unwrap();
-        assert_eq!(row.default, DEFAULT_LIGHT_SAMPLES.to_string());
+        assert_eq!(row.default.to_string(), DEFAULT_LIGHT_SAMPLES.to_string());
     }
 }

@@ -38,26 +38,20 @@ pub fn render_with<A: Application>(
         Some(n) if n.name == A::NAME => &n.params,
         _ => &empty,
     };
-    let p = IntegratorParams::new(params, &settings.set);
+    let p = IntegratorParams::new(A::NAME, params, &settings.set);
     let app = A::from_params(&p, scene)?;
-    let term = app.per_pixel_term();
+    let plan = app.plan();
+    let term = plan.added_per_pixel;
     let overrides = cache_sample_settings(scene, params, settings, term.is_some(), warnings);
-    let mut cs = CacheSettings::from_params(
-        &p,
-        &overrides,
-        scene,
-        (A::NAME, A::PAPER_CACHES),
-        settings.seed,
-        settings.progress,
-    )?;
-    if !A::DGS_GEOMETRY {
+    let mut cs = CacheSettings::from_params(&p, &overrides, scene, A::PAPER_CACHES, settings.seed, settings.progress)?;
+    if !plan.dgs_geometry {
         cs.params.dgs.geometry = false;
     }
-    let without_caches = app.without_caches();
+    let without_caches = plan.shade_by_reference;
     if without_caches.is_some() {
         cs.placement = Placement::Reference;
     }
-    p.check_overrides(A::NAME)?;
+    p.check_overrides()?;
     report_unused(integrator, A::NAME, &settings.set, warnings);
     let mut run_warnings = Warnings::default();
     let run = || -> Result<CachedOutput> {

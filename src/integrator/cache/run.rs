@@ -177,52 +177,8 @@ pub fn render_cached<A: Application>(
     let mut cache_points = Vec::new();
     if let (Placement::Strategy(name), true) = (s.placement, g.valid_count > 0) {
         let strategy = registry::strategy(name)?;
-        if s.caches == 0 {
-            return Err(Error::usage("the cache budget \"caches\" must be at least 1"));
-        }
-        let total = s.caches.min(g.valid_count);
-        let need = total as u64 * app.record_bytes_bound() as u64;
-        if let Some(avail) = available_memory_bytes()
-            && need > avail
-        {
-            return Err(Error::usage(format!(
-                "{}: {total} caches would need up to {:.2} GiB of records ({} bytes each); {:.2} GiB is available",
-                A::NAME,
-                need as f64 / GIB,
-                app.record_bytes_bound(),
-                avail as f64 / GIB
-            )));
-        }
-        if s.caches > g.valid_count {
-            stats.notes.push(format!(
-                "{} caches requested but only {} pixels see the scene: every valid pixel becomes a cache",
-                s.caches, g.valid_count
-            ));
-        }
-        let n1 = match strategy.adaptive {
-            Some(_) => (((1.0 - s.params.ratio as f64) * total as f64).round() as usize).clamp(1, total),
-            None => total,
-        };
-        let t = Instant::now();
-        let first = strategy.initial.place(&g, n1, &s.params, s.seed)?;
-        times.initial_generation = t.elapsed().as_secs_f64();
-        store.evaluate(&first.sites);
-        times.initial_computation = store.eval_secs;
-        stats.stage1_caches = store.len();
-        if let Some(second) = &strategy.adaptive {
-            let (t, eval_before) = (Instant::now(), store.eval_secs);
-            let budget = total - store.len();
-            let info = second.place(&g, &first, &mut store, budget, &s.params, s.seed)?;
-            let adaptive_eval = store.eval_secs - eval_before;
-            times.adaptive_computation = adaptive_eval;
-            times.adaptive_generation = t.elapsed().as_secs_f64() - adaptive_eval;
-            stats.adaptive_rounds = info.rounds;
-            stats.notes.extend(info.notes);
-            discontinuity = info.discontinuity;
-        }
-        store.bar.finish_and_clear();
-        stats.stage2_caches = store.len() - stats.stage1_caches;
-        stats.placement = first.info.clone();
+        let total = budget(app, s, g.valid_count, &mut stats)?;
+        discontinuity = place(&strategy, &mut store, total, s, &mut times, &mut stats)?;
         stage1 = store.sites[..stats.stage1_caches].to_vec();
         stage2 = store.sites[stats.stage1_caches..].to_vec();
         let t = Instant::now();
@@ -253,6 +209,74 @@ pub fn render_cached<A: Application>(
     let mut settings = s.to_json();
     settings.extend(app.settings().into_iter().map(|(k, v)| (k.to_string(), v)));
     Ok(CachedOutput { image, stats, stage1, stage2, discontinuity, settings })
+}
+
+/// The caches to place: the budget, at most one per valid pixel (with a note when it asks for more). A
+/// budget of 0, or one whose records would not fit in the memory available, is an error.
+fn budget<A: Application>(app: &A, s: &CacheSettings, valid: usize, stats: &mut CacheStats) -> Result<usize> {
+    if s.caches == 0 {
+        return Err(Error::usage("the cache budget \"caches\" must be at least 1"));
+    }
+    let total = s.caches.min(valid);
+    let need = total as u64 * app.record_bytes_bound() as u64;
+    if let Some(avail) = available_memory_bytes()
+        && need > avail
+    {
+        return Err(Error::usage(format!(
+            "{}: {total} caches would need up to {:.2} GiB of records ({} bytes each); {:.2} GiB is available",
+            A::NAME,
+            need as f64 / GIB,
+            app.record_bytes_bound(),
+            avail as f64 / GIB
+        )));
+    }
+    if s.caches > valid {
+        stats.notes.push(format!(
+            "{} caches requested but only {valid} pixels see the scene: every valid pixel becomes a cache",
+            s.caches
+        ));
+    }
+    Ok(total)
+}
+
+/// Places `total` caches with `strategy` — its initial stage, then its adaptive one if it has one —
+/// evaluating each site's record into `store`, timed as the paper's Table 4; returns the adaptive stage's
+/// discontinuity map, if it made one.
+fn place<A: Application>(
+    strategy: &registry::Strategy,
+    store: &mut Store<'_, '_, A>,
+    total: usize,
+    s: &CacheSettings,
+    times: &mut StageTimes,
+    stats: &mut CacheStats,
+) -> Result<Option<Vec<f32>>> {
+    let g = store.g;
+    let n1 = match strategy.adaptive {
+        Some(_) => (((1.0 - s.params.ratio as f64) * total as f64).round() as usize).clamp(1, total),
+        None => total,
+    };
+    let t = Instant::now();
+    let first = strategy.initial.place(g, n1, &s.params, s.seed)?;
+    times.initial_generation = t.elapsed().as_secs_f64();
+    store.evaluate(&first.sites);
+    times.initial_computation = store.eval_secs;
+    stats.stage1_caches = store.len();
+    let mut discontinuity = None;
+    if let Some(second) = &strategy.adaptive {
+        let (t, eval_before) = (Instant::now(), store.eval_secs);
+        let budget = total - store.len();
+        let info = second.place(g, &first, store, budget, &s.params, s.seed)?;
+        let adaptive_eval = store.eval_secs - eval_before;
+        times.adaptive_computation = adaptive_eval;
+        times.adaptive_generation = t.elapsed().as_secs_f64() - adaptive_eval;
+        stats.adaptive_rounds = info.rounds;
+        stats.notes.extend(info.notes);
+        discontinuity = info.discontinuity;
+    }
+    store.bar.finish_and_clear();
+    stats.stage2_caches = store.len() - stats.stage1_caches;
+    stats.placement = first.info.clone();
+    Ok(discontinuity)
 }
 
 /// The evaluated caches as shading reads them: the lookup index, the records and each cache's (p, n).

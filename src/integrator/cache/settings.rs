@@ -11,45 +11,81 @@ use crate::error::{Error, Result};
 use crate::placement::{AngularMode, PlacementParams, registry};
 use crate::scene::Scene;
 
-use crate::parse::integrator::{IntegratorParams, Parameter, json_f32};
+use crate::parse::integrator::{Choice, IntegratorParams, ParamDef, Parameter, Valid, json_f32};
+
+/// `placement`: where the caches go.
+pub const PLACEMENT: ParamDef<String> = ParamDef::text(
+    "placement",
+    "vgc+dgs",
+    "`none` (per-sample reference), `im`, `sd`, `sd+as`, `vgc`, `vgc+dgs`, `vgc+as`, `vgc+dgs:diff`, `vgc+dgs:geom`",
+);
+/// `caches`: the budget N_c (default from the application's paper budget and the image's pixels).
+pub const CACHES: ParamDef<i64> = ParamDef::computed(
+    "caches",
+    "B × pixels / (1920×1080)",
+    "total cache budget N_c; B is the paper's budget for the application at 1920×1080 (in its README section)",
+)
+.valid(Valid::AtLeast { lo: 1.0, finite: true });
+/// `ratio`: R.
+pub const RATIO: ParamDef<f64> = ParamDef::float("ratio", 0.15, "stage-2 share R of two-stage strategies")
+    .valid(Valid::Below { lo: 0.0, below: 1.0 });
+/// `sigma_a`: VGC's σ_a (default from the cache density, chosen by the strategy).
+pub const SIGMA_A: ParamDef<f64> = ParamDef::computed(
+    "sigma_a",
+    "from the cache density (25° at ≤40K … 15° at ≥120K caches per 1920×1080 pixels)",
+    "VGC angular threshold, degrees",
+)
+.valid(Valid::Positive { finite: true });
+/// `gamma`: Γ.
+pub const GAMMA: ParamDef<f64> = ParamDef::float("gamma", 0.2, "Γ: threshold growth with depth, per metre");
+/// `meters_per_unit`.
+pub const METERS_PER_UNIT: ParamDef<f64> =
+    ParamDef::float("meters_per_unit", 1.0, "metres per scene unit").valid(Valid::Positive { finite: true });
+/// `lambda`: λ (default from the scene's size, chosen by the strategy).
+pub const LAMBDA: ParamDef<f64> = ParamDef::computed("lambda", "0.5 / L", "normal weight of Eq. 2 and Eq. 5")
+    .valid(Valid::AtLeast { lo: 0.0, finite: true });
+/// `N`: kNN candidates.
+pub const CANDIDATES: ParamDef<i64> = ParamDef::int("N", 20, "kNN candidates").between(1, 1024);
+/// `theta_max`: the normal filter.
+pub const THETA_MAX: ParamDef<f64> =
+    ParamDef::float("theta_max", 30.0, "normal filter, degrees").between(0.0, 180.0, "degrees");
+/// `M`: caches blended per sample.
+pub const KEEP: ParamDef<i64> = ParamDef::int("M", 6, "caches blended per sample").between(1, 1024);
+/// `subpixels` (`--spp` or `--quick` give the default when set).
+pub const SUBPIXELS: ParamDef<i64> = ParamDef::int("subpixels", 4, "sub-pixel samples per pixel").between(1, 1024);
+/// `sdminsize`: S_min.
+pub const SD_MIN_SIZE: ParamDef<i64> =
+    ParamDef::int("sdminsize", 10, "SD minimum cluster size S_min").between(1, 1 << 30);
+/// `jitter`.
+pub const JITTER: ParamDef<f64> =
+    ParamDef::float("jitter", 0.2, "VGC representative jitter (fraction of the cluster extent)");
+/// `angular`: VGC's angular split.
+pub const ANGULAR: Choice<AngularMode> = Choice::new(
+    "angular",
+    "cone",
+    &[("cone", AngularMode::Cone), ("spherical", AngularMode::SphericalAngles)],
+    "VGC angular split: `cone` or `spherical` (the paper's literal φ/θ box)",
+);
+/// `seed` (default `--seed`).
+pub const SEED: ParamDef<i64> = ParamDef::computed("seed", "`--seed`", "seed of placement and evaluation");
 
 /// The generic parameters of every cache-based integrator: name, pbrt type, default, meaning.
 pub const PARAMETERS: &[Parameter] = &[
-    Parameter::new(
-        "placement",
-        "string",
-        "`vgc+dgs`",
-        "`none` (per-sample reference), `im`, `sd`, `sd+as`, `vgc`, `vgc+dgs`, `vgc+as`, `vgc+dgs:diff`, `vgc+dgs:geom`",
-    ),
-    Parameter::new(
-        "caches",
-        "integer",
-        "B × pixels / (1920×1080)",
-        "total cache budget N_c; B is the paper's budget for the application at 1920×1080 (in its README section)",
-    ),
-    Parameter::new("ratio", "float", "0.15", "stage-2 share R of two-stage strategies"),
-    Parameter::new(
-        "sigma_a",
-        "float",
-        "from the cache density (25° at ≤40K … 15° at ≥120K caches per 1920×1080 pixels)",
-        "VGC angular threshold, degrees",
-    ),
-    Parameter::new("gamma", "float", "0.2", "Γ: threshold growth with depth, per metre"),
-    Parameter::new("meters_per_unit", "float", "1", "metres per scene unit"),
-    Parameter::new("lambda", "float", "0.5 / L", "normal weight of Eq. 2 and Eq. 5"),
-    Parameter::new("N", "integer", "20", "kNN candidates"),
-    Parameter::new("theta_max", "float", "30", "normal filter, degrees"),
-    Parameter::new("M", "integer", "6", "caches blended per sample"),
-    Parameter::new("subpixels", "integer", "4", "sub-pixel samples per pixel"),
-    Parameter::new("sdminsize", "integer", "10", "SD minimum cluster size S_min"),
-    Parameter::new("jitter", "float", "0.2", "VGC representative jitter (fraction of the cluster extent)"),
-    Parameter::new(
-        "angular",
-        "string",
-        "`cone`",
-        "VGC angular split: `cone` or `spherical` (the paper's literal φ/θ box)",
-    ),
-    Parameter::new("seed", "integer", "`--seed`", "seed of placement and evaluation"),
+    PLACEMENT.row,
+    CACHES.row,
+    RATIO.row,
+    SIGMA_A.row,
+    GAMMA.row,
+    METERS_PER_UNIT.row,
+    LAMBDA.row,
+    CANDIDATES.row,
+    THETA_MAX.row,
+    KEEP.row,
+    SUBPIXELS.row,
+    SD_MIN_SIZE.row,
+    JITTER.row,
+    ANGULAR.row,
+    SEED.row,
 ];
 
 /// Pixels of the paper's images (1920×1080), to which `Application::PAPER_CACHES` refers.
@@ -128,82 +164,55 @@ pub struct CacheSettings {
 }
 
 impl CacheSettings {
-    /// Reads the parameters of [`PARAMETERS`] for `scene` (messages name `integrator`, whose paper budget at
-    /// 1920×1080 is `paper_caches`); `o` wins over them.
+    /// Reads the parameters of [`PARAMETERS`] for `scene` (the application's paper budget at 1920×1080 is
+    /// `paper_caches`); `o` wins over them.
     pub fn from_params(
         p: &IntegratorParams<'_>,
         o: &CacheOverrides,
         scene: &Scene,
-        (integrator, paper_caches): (&str, usize),
+        paper_caches: usize,
         seed: u64,
         progress: bool,
     ) -> Result<Self> {
         let [w, h] = scene.film.cropped_bounds().size();
         let default_caches = ((w * h) as f64 * paper_caches as f64 / PAPER_PIXELS).round().max(1.0) as i64;
-        let bad = |name: &str, what: &str| Error::usage(format!("{}{integrator}: \"{name}\" {what}", p.at(name)));
         // Read even when overridden, so a written value counts as read (the override wins silently).
-        let caches = p.int_or("caches", default_caches)?;
-        let caches = match o.caches {
-            Some(c) => c as i64,
-            None => caches,
-        };
-        if caches < 1 {
-            return Err(bad("caches", &format!("must be at least 1, got {caches}")));
-        }
-        let ratio = p.float_or("ratio", 0.15)?;
-        if !(0.0..1.0).contains(&ratio) {
-            return Err(bad("ratio", &format!("must be in [0, 1), got {ratio}")));
-        }
-        let positive = |name: &'static str, v: f64| {
-            if v > 0.0 && v.is_finite() { Ok(v) } else { Err(bad(name, &format!("must be positive, got {v}"))) }
-        };
-        let sigma_a = p.float("sigma_a")?.map(|v| positive("sigma_a", v)).transpose()?;
-        let lambda = p
-            .float("lambda")?
-            .map(|v| if v >= 0.0 && v.is_finite() { Ok(v) } else { Err(bad("lambda", "must be ≥ 0")) })
-            .transpose()?;
-        let count = |name: &'static str, default: i64, max: i64| -> Result<usize> {
-            let v = p.int_or(name, default)?;
-            if !(1..=max).contains(&v) {
-                return Err(bad(name, &format!("must be between 1 and {max}, got {v}")));
-            }
-            Ok(v as usize)
-        };
-        let candidates = count("N", 20, 1024)?;
-        let keep = count("M", 6, 1024)?;
+        let written = p.written_or(&CACHES, default_caches)?;
+        let caches = p.check(&CACHES, o.caches.map_or(written, |c| c as i64))?;
+        let ratio = p.get(&RATIO)?;
+        let sigma_a = p.get_opt(&SIGMA_A)?;
+        let lambda = p.get_opt(&LAMBDA)?;
+        let candidates = p.get(&CANDIDATES)? as usize;
+        let keep = p.get(&KEEP)? as usize;
         if keep > candidates {
-            return Err(Error::usage(format!("{integrator}: M ({keep}) cannot exceed N ({candidates})")));
+            return Err(Error::usage(format!("{}: M ({keep}) cannot exceed N ({candidates})", p.integrator())));
         }
-        let subpixels = count("subpixels", o.subpixels.map_or(4, i64::from), 1024)? as u32;
-        let theta_max = p.float_or("theta_max", 30.0)?;
-        if !(0.0..=180.0).contains(&theta_max) {
-            return Err(bad("theta_max", &format!("must be in [0, 180] degrees, got {theta_max}")));
-        }
-        let angular = match p.string_or("angular", "cone")?.as_str() {
-            "cone" => AngularMode::Cone,
-            "spherical" => AngularMode::SphericalAngles,
-            other => return Err(bad("angular", &format!("must be \"cone\" or \"spherical\", got \"{other}\""))),
-        };
+        let subpixels = match o.subpixels {
+            Some(n) => p.get_or(&SUBPIXELS, i64::from(n))?,
+            None => p.get(&SUBPIXELS)?,
+        } as u32;
+        let theta_max = p.get(&THETA_MAX)?;
+        let angular = p.choice(&ANGULAR)?;
         let mut params = PlacementParams {
             ratio: ratio as f32,
             sigma_a_deg: sigma_a.map(|v| v as f32),
-            gamma: p.float_or("gamma", 0.2)? as f32,
-            meters_per_unit: positive("meters_per_unit", p.float_or("meters_per_unit", 1.0)?)? as f32,
+            gamma: p.get(&GAMMA)? as f32,
+            meters_per_unit: p.get(&METERS_PER_UNIT)? as f32,
             lambda: lambda.map(|v| v as f32),
-            jitter: p.float_or("jitter", 0.2)? as f32,
+            jitter: p.get(&JITTER)? as f32,
             angular,
-            sd_min_size: count("sdminsize", 10, 1 << 30)?,
+            sd_min_size: p.get(&SD_MIN_SIZE)? as usize,
             ..Default::default()
         };
         params.lookup.candidates = candidates;
         params.lookup.keep = keep;
         params.lookup.theta_max_deg = theta_max as f32;
-        let written = p.string_or("placement", "vgc+dgs")?;
+        let written = p.get(&PLACEMENT)?;
         let placement = match o.placement {
             Some(pl) => pl,
             None => Placement::parse(&written)?,
         };
-        let seed = p.int_or("seed", seed as i64)? as u64;
+        let seed = p.get_or(&SEED, seed as i64)? as u64;
         Ok(CacheSettings { placement, caches: caches as usize, params, subpixels, seed, progress })
     }
 

@@ -28,7 +28,7 @@ pub struct StageTimes {
     pub finish_records: f64,
     /// Shading every sub-pixel sample.
     pub render: f64,
-    /// Rendering the per-pixel term added to the cached image (`Application::per_pixel_term`).
+    /// Rendering the per-pixel term added to the cached image (`CachePlan::added_per_pixel`).
     pub per_pixel_term: f64,
     /// Everything.
     pub total: f64,

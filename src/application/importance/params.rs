@@ -1,0 +1,254 @@
+//! Importance caching's parameters (the `importancecache` table of the README): each declared once with
+//! its default and range, read into [`ImportanceCache`], reported back for `--stats`, and copied into the
+//! per-pixel baselines' settings.
+//!
+//! Depends on the parameter reader `parse::integrator` and its parent's settings type.
+
+use crate::error::Result;
+use crate::parse::integrator::{Choice, IntegratorParams, ParamDef, Parameter, Valid};
+
+use super::mixture::{LETTERS, Mis, TECHNIQUES};
+use super::vpl::Vpls;
+use super::{DEFAULT_LIGHT_SAMPLES, ImportanceCache, MAX_TECHNIQUE_DRAWS, Sampling};
+use crate::application::Application;
+use crate::application::Baseline;
+
+/// Most VPLs a render may ask for (beyond the memory check).
+const MAX_VPLS: i64 = 1 << 26;
+
+/// `vpls`.
+pub const VPLS: ParamDef<i64> =
+    ParamDef::int("vpls", 8192, "virtual point lights (direct and indirect light)").between(1, MAX_VPLS);
+/// `vpldepth`.
+pub const VPLDEPTH: ParamDef<i64> =
+    ParamDef::int("vpldepth", 5, "most surface vertices of a light path").between(0, 64);
+/// `vplseed`.
+pub const VPLSEED: ParamDef<i64> =
+    ParamDef::int("vplseed", 0, "seed of the VPLs (fixed across --seed, so seeds share one reference)");
+/// `clamp`: d_c / L.
+pub const CLAMP: ParamDef<f64> =
+    ParamDef::float("clamp", 0.025, "distance clamp d_c as a fraction of L (estimator and reference alike)")
+        .valid(Valid::AtLeast { lo: 0.0, finite: true });
+/// `distributions`: the letters of the techniques that draw.
+pub const DISTRIBUTIONS: ParamDef<String> = ParamDef::text(
+    "distributions",
+    "fubcg",
+    "techniques that draw, each letter lightsamples draws: f full, u unoccluded, b bounded, c conservative, g lobe",
+);
+/// `lightsamples`: draws per letter.
+pub const LIGHTSAMPLES: ParamDef<i64> = ParamDef::int(
+    "lightsamples",
+    DEFAULT_LIGHT_SAMPLES as i64,
+    "VPLs each letter of distributions draws per sub-pixel sample (the paper: 1, four light samples per shading \
+     point)",
+)
+.between(1, MAX_TECHNIQUE_DRAWS as i64);
+/// `mis`: how the techniques combine.
+pub const MIS: Choice<Mis> = Choice::new(
+    "mis",
+    "balance",
+    &[("balance", Mis::Balance), ("alphamax", Mis::AlphaMax)],
+    "combination of the techniques: balance or alphamax",
+);
+/// `sampling`: caches or a many-light baseline.
+pub const SAMPLING: Choice<Sampling> = Choice::new(
+    "sampling",
+    "cache",
+    &[("cache", Sampling::Cache), ("uniform", Sampling::Uniform), ("power", Sampling::Power)],
+    "cache: importance caching; uniform or power: many-light baselines without caches",
+);
+/// `draws`: the baselines' VPLs per sample.
+pub const DRAWS: ParamDef<i64> = ParamDef::int(
+    "draws",
+    0,
+    "VPLs the uniform and power baselines draw per sample (0: as many as f, u, b and c draw together)",
+)
+.between(0, 1 << 20);
+/// `splitcone`.
+pub const SPLITCONE: ParamDef<f64> = ParamDef::float(
+    "splitcone",
+    10.0,
+    "degrees: VPLs in a sharper reflection lobe's cone, or whose lobe's cone holds the point, are drawn apart at \
+     the shading point by their exact unoccluded light (every sampling; 0: off)",
+)
+.between(0.0, 90.0, "degrees");
+/// `splitnear`.
+pub const SPLITNEAR: ParamDef<f64> = ParamDef::float(
+    "splitnear",
+    1.0,
+    "VPLs closer to the shading point than this many clamp distances d_c are drawn apart there too (every \
+     sampling; 0: off)",
+)
+.between(0.0, 100.0, "clamp distances");
+/// `visangle`.
+pub const VISANGLE: ParamDef<f64> = ParamDef::float(
+    "visangle",
+    10.0,
+    "degrees: a cache traces only the two ends of a run of VPLs this close together as it sees them, and takes \
+     the run as visible when both are (else traces every member; 0: one ray per VPL)",
+)
+.between(0.0, 45.0, "degrees");
+/// `lobecone`.
+pub const LOBECONE: ParamDef<f64> = ParamDef::float(
+    "lobecone",
+    45.0,
+    "degrees: the widest glossy lobe (wider than splitcone) for which the lobe technique g draws a VPL among \
+     those in its cone, by flux times the lobe's falloff over clamped squared distance",
+)
+.between(0.0, 90.0, "degrees");
+/// `stratify`.
+pub const STRATIFY: ParamDef<bool> = ParamDef::bool(
+    "stratify",
+    true,
+    "the VPL draws of a pixel's sub-pixel samples are stratified across them (false: independent draws)",
+);
+
+/// The table, in the README's order.
+pub const PARAMETERS: &[Parameter] = &[
+    VPLS.row,
+    VPLDEPTH.row,
+    VPLSEED.row,
+    CLAMP.row,
+    DISTRIBUTIONS.row,
+    LIGHTSAMPLES.row,
+    MIS.row,
+    SAMPLING.row,
+    DRAWS.row,
+    SPLITCONE.row,
+    SPLITNEAR.row,
+    VISANGLE.row,
+    LOBECONE.row,
+    STRATIFY.row,
+];
+
+impl ImportanceCache {
+    /// Reads [`PARAMETERS`].
+    pub(super) fn read(p: &IntegratorParams<'_>) -> Result<Self> {
+        let vpls = read_vpls(p)?;
+        let max_depth = p.get(&VPLDEPTH)?;
+        let clamp = p.get(&CLAMP)?;
+        let letters = p.get(&DISTRIBUTIONS)?;
+        let light_samples = p.get(&LIGHTSAMPLES)? as u32;
+        let techniques = techniques(p, &letters, light_samples)?;
+        let mis = p.choice(&MIS)?;
+        let sampling = p.choice(&SAMPLING)?;
+        let draws = p.get(&DRAWS)?;
+        let split_cone = p.get(&SPLITCONE)?;
+        let split_near = p.get(&SPLITNEAR)?;
+        let vis_angle = p.get(&VISANGLE)?;
+        let lobe_cone = p.get(&LOBECONE)?;
+        Ok(ImportanceCache {
+            lobe_cone: lobe_cone as f32,
+            stratify: p.get(&STRATIFY)?,
+            vis_angle: vis_angle as f32,
+            split_cone: split_cone as f32,
+            split_near: split_near as f32,
+            draws: draws as u32,
+            vpls: vpls as usize,
+            max_depth: max_depth as u32,
+            vpl_seed: p.get(&VPLSEED)? as u64,
+            clamp: clamp as f32,
+            techniques,
+            light_samples,
+            mis,
+            sampling,
+        })
+    }
+
+    /// The resolved parameters for the `--stats` report.
+    pub(super) fn settings_report(&self) -> Vec<(&'static str, serde_json::Value)> {
+        let number = |v: f32| serde_json::Number::from_f64(v as f64).map_or(serde_json::Value::Null, Into::into);
+        vec![
+            ("vpls", self.vpls.into()),
+            ("vpldepth", self.max_depth.into()),
+            ("vplseed", self.vpl_seed.into()),
+            ("clamp", number(self.clamp)),
+            ("distributions", self.letters().into()),
+            ("lightsamples", self.light_samples.into()),
+            ("mis", if self.mis == Mis::Balance { "balance" } else { "alphamax" }.into()),
+            ("sampling", self.sampling.name().into()),
+            ("draws", self.baseline_draws().into()),
+            ("splitcone", number(self.split_cone)),
+            ("splitnear", number(self.split_near)),
+            ("visangle", number(self.vis_angle)),
+            ("lobecone", number(self.lobe_cone)),
+            ("stratify", self.stratify.into()),
+        ]
+    }
+
+    /// Power sampling, then uniform sampling, with the same VPLs and sub-pixel samples; their sample count
+    /// is `draws` (VPLs per sample), so their pixels integrate the same footprint as the reference's.
+    pub(super) fn baselines(&self) -> Vec<Baseline> {
+        [Sampling::Power, Sampling::Uniform]
+            .into_iter()
+            .map(|sampling| {
+                let set = [
+                    ("sampling", sampling.name().to_string()),
+                    ("vpls", self.vpls.to_string()),
+                    ("vpldepth", self.max_depth.to_string()),
+                    ("vplseed", self.vpl_seed.to_string()),
+                    ("clamp", self.clamp.to_string()),
+                    ("distributions", self.letters()),
+                    ("splitcone", self.split_cone.to_string()),
+                    ("splitnear", self.split_near.to_string()),
+                ];
+                Baseline {
+                    label: sampling.name(),
+                    integrator: Self::NAME,
+                    set: set.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
+                    samples: "draws",
+                    scale: 1.0,
+                }
+            })
+            .collect()
+    }
+}
+
+/// `vpls`, refused with the memory its VPLs would take when out of range or beyond the memory available.
+fn read_vpls(p: &IntegratorParams<'_>) -> Result<i64> {
+    let vpls = p.get_unchecked(&VPLS)?;
+    if vpls < 1 {
+        return p.check(&VPLS, vpls);
+    }
+    // What the VPLs alone would occupy (an upper bound: every one with its own BSDF).
+    let need = (vpls as u128 * Vpls::bytes_for(1) as u128).min(u64::MAX as u128) as u64;
+    if vpls > MAX_VPLS {
+        let range = format!("must be between 1 and {MAX_VPLS}, got {vpls}");
+        return Err(p.invalid(&VPLS.row, format!("{range} (up to {} of VPLs)", gib(need))));
+    }
+    if let Some(avail) = crate::os::available_memory_bytes()
+        && need > avail
+    {
+        let what = format!("{vpls} would need up to {} of memory; {} is available", gib(need), gib(avail));
+        return Err(p.invalid(&VPLS.row, what));
+    }
+    Ok(vpls)
+}
+
+/// Draws per technique from the letters of `distributions`, each `light_samples` draws.
+fn techniques(p: &IntegratorParams<'_>, letters: &str, light_samples: u32) -> Result<[u32; TECHNIQUES]> {
+    let mut techniques = [0u32; TECHNIQUES];
+    for ch in letters.chars() {
+        match LETTERS.iter().position(|&l| l == ch.to_ascii_lowercase()) {
+            Some(t) if techniques[t] + light_samples <= MAX_TECHNIQUE_DRAWS => techniques[t] += light_samples,
+            _ => {
+                return Err(p.invalid(
+                    &DISTRIBUTIONS.row,
+                    format!(
+                        "must be letters of f, u, b, c, g, each drawing at most {MAX_TECHNIQUE_DRAWS} times (its count \
+                         times lightsamples {light_samples}; e.g. \"fubcg\"), got \"{letters}\""
+                    ),
+                ));
+            }
+        }
+    }
+    if techniques.iter().all(|&n| n == 0) {
+        return Err(p.invalid(&DISTRIBUTIONS.row, "must name at least one of f, u, b, c, g"));
+    }
+    Ok(techniques)
+}
+
+/// `bytes` in GiB for messages.
+fn gib(bytes: u64) -> String {
+    format!("{:.2} GiB", bytes as f64 / (1u64 << 30) as f64)
+}
