@@ -40,8 +40,11 @@ pub trait PixelIntegrator: Sync {
 pub const INTEGRATORS: &[&str] = &["ambientocclusion", "directlighting", "path"];
 
 /// Each per-pixel integrator of [`INTEGRATORS`] with its parameter table.
-pub const PARAMETERS: &[(&str, &[Parameter])] =
-    &[("ambientocclusion", ao::PARAMETERS), ("directlighting", directlighting::PARAMETERS), ("path", path::PARAMETERS)];
+pub const PARAMETERS: &[(&str, &[Parameter])] = &[
+    ("ambientocclusion", ambient_occlusion::PARAMETERS),
+    ("directlighting", directlighting::PARAMETERS),
+    ("path", path::PARAMETERS),
+];
 
 /// The per-pixel integrator named `name` with parameters `p`, or `None` when no per-pixel integrator has
 /// that name (the caller knows the cache-based names too, and says so).

@@ -14,7 +14,7 @@
 //! The positions the draws take in the distributions are stratified across the pixel's sub-pixel samples
 //! ([`Stratum`], parameter `stratify`) — a choice beyond ALGORITHMS.md §6.3, which draws each sample
 //! independently: every draw alone is distributed as before, so the estimator is unchanged in expectation,
-//! and the pixel's samples stop clumping on the same VPLs (measured in `results/importance/README.md`).
+//! and the pixel's samples stop clumping on the same VPLs (measured in `experiments/notes/importance.md`).
 //! Directly seen emitters add their radiance. The few VPLs a near-specular lobe singles out at a shading
 //! point, and those closer to it than d_c, are drawn apart there, in every sampling mode ([`sharp`],
 //! parameters `splitcone` and `splitnear`). A glossy lobe wider than that (up to `lobecone`) adds a fifth
@@ -72,7 +72,7 @@ const MAX_TECHNIQUE_DRAWS: u32 = lobe::MAX_DRAWS as u32;
 /// ALGORITHMS.md §6.3 (after the paper) draws one per technique, four light samples per shading point; we
 /// draw eight per technique. A shading point's fixed work (its camera ray, the search for its caches, the
 /// mixture, the split and G's walk) cost half to three quarters of the render stage at one draw per technique
-/// on the three 640×360 scenes of `results/importance/README.md`, so further draws come cheap, and, stratified
+/// on the three 640×360 scenes of `experiments/notes/importance.md`, so further draws come cheap, and, stratified
 /// across the pixel's samples, they lower the error faster than one over their count: error² × time fell
 /// 4.7–5.7× from one to eight draws per technique on each of the three, and 1.3–1.4× more from eight to
 /// sixteen, which doubles the time of an image (the table there).
