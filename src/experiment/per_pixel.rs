@@ -1,6 +1,6 @@
 //! Experiments: the per-pixel side of "caching exists to be faster than per-pixel rendering at equal
 //! quality" — the jobs of a spec's `baselines`. Renders the application's per-pixel baselines
-//! (`Application::baselines`: for AO pbrt-v3's `ambientocclusion` with the cache runs' ray length, divided
+//! (`Study::baselines` of `Application::STUDY`: for AO pbrt-v3's `ambientocclusion` with the cache runs' ray length, divided
 //! by π) with a box filter (what the cache driver's sub-pixel shading does): the first once converged (64
 //! pixel samples × 64 rays, so the pixel footprint is integrated too — four sub-pixel samples at other
 //! positions than the reference's differ at every edge however many rays they trace), and each at several

@@ -36,10 +36,10 @@
 
 use glam::Vec3A;
 
-#[cfg(doc)]
-use super::sharp::sharp_cone;
-use super::sharp::{Cone, sharp_lobe};
 use super::spheres::SphereTree;
+#[cfg(doc)]
+use super::split::sharp_cone;
+use super::split::{Cone, sharp_lobe};
 use super::vpl::{Emitter, Receiver, Vpls};
 use crate::sampling::unit_f64;
 
@@ -264,7 +264,7 @@ mod tests {
     fn exactly_the_vpls_in_the_lobes_cone_are_drawable_and_near_ones_are_favoured() {
         with_lobe(|vpls, tree, x| {
             let lobe = tree.at(vpls, x, &[]).unwrap();
-            let cone = crate::application::importance::sharp::sharp_cone(&x.bsdf, x.wo, 45f32.to_radians()).unwrap();
+            let cone = crate::application::importance::split::sharp_cone(&x.bsdf, x.wo, 45f32.to_radians()).unwrap();
             // Seen along (0, −1, 1)/√2 the mirror direction is (0, 1, 1)/√2: toward the lamp's +y half.
             assert!(cone.axis.y > 0.6 && cone.axis.z > 0.6, "{:?}", cone.axis);
             let mut inside = Vec::new();

@@ -16,7 +16,7 @@
 //! independently: every draw alone is distributed as before, so the estimator is unchanged in expectation,
 //! and the pixel's samples stop clumping on the same VPLs (measured in `experiments/notes/importance.md`).
 //! Directly seen emitters add their radiance. The few VPLs a near-specular lobe singles out at a shading
-//! point, and those closer to it than d_c, are drawn apart there, in every sampling mode ([`sharp`],
+//! point, and those closer to it than d_c, are drawn apart there, in every sampling mode ([`split`],
 //! parameters `splitcone` and `splitnear`). A glossy lobe wider than that (up to `lobecone`) adds a fifth
 //! technique, G, drawing among the VPLs in its cone by flux, the lobe's falloff and clamped squared distance
 //! ([`lobe`]) — beyond ALGORITHMS.md §6.3's four, for the glossy receivers whose caches give their lobe's
@@ -36,8 +36,8 @@ pub mod distribution;
 pub mod lobe;
 pub mod mixture;
 pub mod params;
-pub mod sharp;
 pub mod spheres;
+pub mod split;
 pub mod visibility;
 pub mod vpl;
 
@@ -56,7 +56,7 @@ use super::{Application, CachePlan, Neighbour, PerSample, Study};
 use distribution::Quantised;
 use lobe::LobeTree;
 use mixture::{LETTERS, LOBE, Mis, Mixture, TECHNIQUES};
-use sharp::Split;
+use split::Split;
 use vpl::{Receiver, Vpls};
 
 /// Stream tag of VPL generation.
@@ -121,10 +121,10 @@ pub struct ImportanceCache {
     pub sampling: Sampling,
     /// VPLs a baseline draws per sample (0: one per enabled technique).
     pub draws: u32,
-    /// Widest sharp-lobe cone summed apart at the shading point, degrees (0: no cones; [`sharp`]).
+    /// Widest sharp-lobe cone summed apart at the shading point, degrees (0: no cones; [`split`]).
     pub split_cone: f32,
     /// Radius of the ball around the shading point whose VPLs are summed apart, in units of d_c (0: no
-    /// ball; [`sharp`]).
+    /// ball; [`split`]).
     pub split_near: f32,
     /// Widest angle, degrees, of a run of VPLs whose shadow rays a cache's record shares (0: one ray per
     /// VPL; [`visibility`]).

@@ -1,5 +1,5 @@
 //! STAGE 5 (application, importance caching): a tree of bounding spheres over the positional VPLs, for
-//! the queries of the split ([`super::sharp`]) and of the lobe technique ([`super::lobe`]): which VPLs lie
+//! the queries of the split ([`super::split`]) and of the lobe technique ([`super::lobe`]): which VPLs lie
 //! in a ball or a cone around a shading point.
 //!
 //! The VPL list's Morton order is cut in halves down to runs of at most [`LEAF`] VPLs; each node keeps a

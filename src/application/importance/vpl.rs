@@ -594,7 +594,7 @@ mod tests {
         // Light arriving 30° from the normal: the lobe's axis is the mirror direction, 30° the other way.
         let n = Vec3A::Z;
         let wi = Vec3A::new(0.5, 0.0, 0.75f32.sqrt());
-        let g = GeneralVpl { bsdf: crate::application::importance::sharp::glossy(0.1, n), wi };
+        let g = GeneralVpl { bsdf: crate::application::importance::split::glossy(0.1, n), wi };
         let axis = Vec3A::new(-0.5, 0.0, 0.75f32.sqrt());
         let f = |w: Vec3A| luminance(g.bsdf.f(w, wi, BxdfFlags::ALL));
         // Toward a cache 25° from the axis, with a region seen 15° wide, or none.
