@@ -2,7 +2,7 @@
 //! times and keeps the least CPU time, listing every run; the irradiance-caching comparison refuses it, and
 //! `--seeds` (its own) is refused elsewhere; `cachert bench micro --quick` runs every micro-benchmark on tiny
 //! inputs and prints its rows (what it prints about time is not checked).
-//! (The comparisons with pbrt-v3 and pbrt-v2 themselves are benchmarks, run by hand: see results/bench.)
+//! (The comparisons with pbrt-v3 and pbrt-v2 themselves are benchmarks, run by hand: see experiments/notes/bench.md and experiments/results/bench.)
 
 mod common;
 

@@ -10,7 +10,8 @@
 //!
 //! The scenes are 32×24 pixels with the applications' quick settings (`Study::quick` of `Application::STUDY`), so the whole
 //! file runs in seconds. The long sweeps over real scenes (seed stability, the map of where each placement
-//! loses to IM) run through `cachert experiment`; their results are in results/stability.
+//! loses to IM) run through `cachert experiment`: the specs experiments/stability-*.toml, their results in
+//! experiments/results/stability-*, the findings in experiments/notes/stability.md.
 
 use std::collections::HashMap;
 use std::path::Path;

@@ -2,7 +2,8 @@
 //! `experiments/summarise.py` printed), each per-pixel estimator's error at the cache method's wall time as
 //! a ratio to the cache method's (what the retired `equal_time.py` printed; its two-file form, baselines from
 //! another sweep, is `--replot DIR --baselines DIR2`), and every run measured against the converged
-//! per-pixel image (the flag form's second table).
+//! per-pixel image (the flag form's second table), and the settings whose error spreads over the seeds by more
+//! than 10 % of its mean (what the retired `results/stability/aggregate.py` flagged).
 //!
 //! Depends only on the records of `jobs`, [`super::summary`] and [`super::tables::Table`]; it reads no file.
 
@@ -237,6 +238,63 @@ pub fn converged(records: &[Record]) -> Vec<Table> {
     out
 }
 
+/// A setting whose error spreads over its seeds by more than this share of its mean is listed by [`seed_spread`].
+const SPREAD: f64 = 0.10;
+
+/// The cache runs whose RMSE or HDR-FLIP has a sample standard deviation over the seeds above 10 % of its mean,
+/// per scene, application, budget, method and varied setting; no table when none is. Its note gives, per
+/// application, the largest RMSE spread of all settings with two or more seeds.
+pub fn seed_spread(records: &[Record]) -> Vec<Table> {
+    type Key = (String, String, usize, String, String);
+    let mut groups: BTreeMap<Key, Vec<&Record>> = BTreeMap::new();
+    for r in ok(records).filter(|r| is_cache_run(r)) {
+        let key = (r.scene.clone(), r.application.clone(), r.caches, r.placement.clone(), r.varied.clone());
+        groups.entry(key).or_default().push(r);
+    }
+    let mut rows = Vec::new();
+    let mut largest: BTreeMap<String, (f64, String)> = BTreeMap::new();
+    for ((scene, app, caches, placement, varied), rs) in &groups {
+        let Some((r, f)) = errors(rs) else { continue };
+        if r.n < 2 {
+            continue;
+        }
+        let (r_cv, f_cv) = (r.sd / r.mean, f.sd / f.mean);
+        let method = if varied.is_empty() { placement.clone() } else { format!("{placement} {varied}") };
+        let at = format!("{scene}, {caches} caches, {method}");
+        let entry = largest.entry(app.clone()).or_insert((f64::NEG_INFINITY, String::new()));
+        if r_cv > entry.0 {
+            *entry = (r_cv, at);
+        }
+        if r_cv > SPREAD || f_cv > SPREAD {
+            rows.push(vec![
+                format!("{scene} {app}"),
+                caches.to_string(),
+                method,
+                r.n.to_string(),
+                format!("{:.5} ± {:.5} ({:.0} %)", r.mean, r.sd, 100.0 * r_cv),
+                format!("{:.5} ± {:.5} ({:.0} %)", f.mean, f.sd, 100.0 * f_cv),
+            ]);
+        }
+    }
+    if rows.is_empty() {
+        return Vec::new();
+    }
+    let most: Vec<String> = largest.iter().map(|(app, (cv, at))| format!("{app} {:.1} % ({at})", 100.0 * cv)).collect();
+    vec![Table {
+        title: "Seed spread above 10 %".into(),
+        note: format!(
+            "Cache runs whose RMSE or HDR-FLIP has a standard deviation over the seeds above 10 % of its mean \
+             (in parentheses: the standard deviation as a share of the mean); every other setting spreads less. \
+             Largest RMSE spread per application: {}.",
+            most.join("; ")
+        ),
+        header: ["scene, application", "caches", "method", "seeds", "RMSE mean ± sd", "HDR-FLIP mean ± sd"]
+            .map(String::from)
+            .to_vec(),
+        rows,
+    }]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -248,5 +306,24 @@ mod tests {
         assert!((at_time(&pts, 2.0, 1) - (0.1f64.ln() * 0.5 + 0.05f64.ln() * 0.5).exp()).abs() < 1e-12);
         assert!((at_time(&pts, 0.25, 2) - 0.8).abs() < 1e-12);
         assert!((at_time(&pts, 16.0, 1) - 0.025).abs() < 1e-12);
+    }
+
+    #[test]
+    fn seed_spread_lists_the_settings_above_ten_percent() {
+        let head = "id,status,scene,application,placement,method,caches,seed,varied,rmse,flip,total_s\n";
+        let mut text = head.to_string();
+        for (seed, (a, b)) in [(0.10, 0.20), (0.10, 0.20), (0.10, 0.30)].iter().enumerate() {
+            text += &format!("im-{seed},ok,s,app,im,im,100,{seed},,{a},0.5,1\n");
+            text += &format!("sd-{seed},ok,s,app,sd,sd,100,{seed},,{b},0.5,1\n");
+        }
+        let records = super::super::results::parse_csv(std::path::Path::new("x.csv"), &text).unwrap();
+        let t = seed_spread(&records);
+        assert_eq!(t.len(), 1);
+        assert_eq!(t[0].rows.len(), 1, "{:?}", t[0].rows);
+        assert_eq!(t[0].rows[0][2], "sd");
+        assert!(t[0].rows[0][4].ends_with("(25 %)"), "{}", t[0].rows[0][4]);
+        assert!(t[0].note.contains("app 24.7 % (s, 100 caches, sd)"), "{}", t[0].note);
+        let calm: Vec<Record> = records.into_iter().filter(|r| r.placement == "im").collect();
+        assert!(seed_spread(&calm).is_empty());
     }
 }
