@@ -197,65 +197,94 @@ pub fn parse_csv(path: &Path, text: &str) -> Result<Vec<Record>> {
         if fields.len() != names.len() {
             return Err(at(n, 1, format!("expected {} fields as in the header, found {}", names.len(), fields.len())));
         }
-        let get = |name: &str| col(name).map(|k| (fields[k].0, fields[k].1.as_str()));
-        let text = |name: &str| get(name).map_or(String::new(), |(_, v)| v.to_string());
-        // A number, `NaN` for an empty or `NaN` field (a run that measured nothing).
-        let number = |name: &str| -> Result<Option<f64>> {
-            match get(name) {
-                None | Some((_, "")) => Ok(None),
-                Some((c, v)) => v
-                    .parse::<f64>()
-                    .map(Some)
-                    .map_err(|_| at(n, c, format!("expected {name} (a number), found \"{v}\""))),
-            }
-        };
-        let count = |name: &str| -> Result<Option<u64>> {
-            match get(name) {
-                None | Some((_, "")) => Ok(None),
-                Some((c, v)) => v
-                    .parse::<u64>()
-                    .map(Some)
-                    .map_err(|_| at(n, c, format!("expected {name} (a whole number), found \"{v}\""))),
-            }
-        };
+        records.push(CsvLine { names: &names, fields, line: n, at: &at }.record()?);
+    }
+    Ok(records)
+}
+
+/// One data line of a results.csv, read by column name (a column the file lacks reads as empty).
+struct CsvLine<'a> {
+    /// The header's column names.
+    names: &'a [String],
+    /// The line's fields with the column (1-based) each starts at.
+    fields: Vec<(usize, String)>,
+    /// The line's number (1-based).
+    line: usize,
+    /// Makes an error at a line and column of the file.
+    at: &'a dyn Fn(usize, usize, String) -> Error,
+}
+
+impl CsvLine<'_> {
+    fn get(&self, name: &str) -> Option<(usize, &str)> {
+        let k = self.names.iter().position(|n| n == name)?;
+        Some((self.fields[k].0, self.fields[k].1.as_str()))
+    }
+
+    fn text(&self, name: &str) -> String {
+        self.get(name).map_or(String::new(), |(_, v)| v.to_string())
+    }
+
+    /// A number; `None` for an empty field or a missing column (a run that measured nothing).
+    fn number(&self, name: &str) -> Result<Option<f64>> {
+        match self.get(name) {
+            None | Some((_, "")) => Ok(None),
+            Some((c, v)) => v
+                .parse::<f64>()
+                .map(Some)
+                .map_err(|_| (self.at)(self.line, c, format!("expected {name} (a number), found \"{v}\""))),
+        }
+    }
+
+    /// A whole number; `None` as for [`CsvLine::number`].
+    fn count(&self, name: &str) -> Result<Option<u64>> {
+        match self.get(name) {
+            None | Some((_, "")) => Ok(None),
+            Some((c, v)) => v
+                .parse::<u64>()
+                .map(Some)
+                .map_err(|_| (self.at)(self.line, c, format!("expected {name} (a whole number), found \"{v}\""))),
+        }
+    }
+
+    /// The line as a [`Record`] (NaN errors and times for what it left empty).
+    fn record(&self) -> Result<Record> {
         let mut times = BTreeMap::new();
-        for name in names.iter().filter_map(|h| h.strip_suffix("_s")).filter(|h| *h != "reference") {
-            if let Some(v) = number(&format!("{name}_s"))? {
+        for name in self.names.iter().filter_map(|h| h.strip_suffix("_s")).filter(|h| *h != "reference") {
+            if let Some(v) = self.number(&format!("{name}_s"))? {
                 times.insert(name.to_string(), v);
             }
         }
-        let resolution = match (count("width")?, count("height")?) {
+        let resolution = match (self.count("width")?, self.count("height")?) {
             (Some(w), Some(h)) => Some([w as u32, h as u32]),
             _ => None,
         };
-        records.push(Record {
-            id: text("id"),
-            status: text("status"),
-            error: text("error"),
-            scene: text("scene"),
-            application: text("application"),
-            placement: text("placement"),
-            method: text("method"),
-            samples: count("samples")?.map(|s| s.min(u32::MAX as u64) as u32),
-            caches: count("caches")?.unwrap_or(0) as usize,
-            seed: count("seed")?.unwrap_or(0),
+        Ok(Record {
+            id: self.text("id"),
+            status: self.text("status"),
+            error: self.text("error"),
+            scene: self.text("scene"),
+            application: self.text("application"),
+            placement: self.text("placement"),
+            method: self.text("method"),
+            samples: self.count("samples")?.map(|s| s.min(u32::MAX as u64) as u32),
+            caches: self.count("caches")?.unwrap_or(0) as usize,
+            seed: self.count("seed")?.unwrap_or(0),
             resolution,
-            varied: text("varied"),
-            set: text("set"),
-            rmse: number("rmse")?.unwrap_or(f64::NAN),
-            flip: number("flip")?.unwrap_or(f64::NAN),
-            rmse_converged: number("rmse_converged")?,
-            flip_converged: number("flip_converged")?,
+            varied: self.text("varied"),
+            set: self.text("set"),
+            rmse: self.number("rmse")?.unwrap_or(f64::NAN),
+            flip: self.number("flip")?.unwrap_or(f64::NAN),
+            rmse_converged: self.number("rmse_converged")?,
+            flip_converged: self.number("flip_converged")?,
             times,
-            caches_placed: [count("stage1")?.unwrap_or(0), count("stage2")?.unwrap_or(0)],
-            rays: [count("cache_rays")?.unwrap_or(0), count("render_rays")?.unwrap_or(0)],
-            peak_memory_bytes: count("peak_memory_bytes")?,
-            record_bytes: count("record_bytes")?.unwrap_or(0),
-            sigma_a_deg: number("sigma_a_deg")?,
-            reference_s: number("reference_s")?.unwrap_or(f64::NAN),
-        });
+            caches_placed: [self.count("stage1")?.unwrap_or(0), self.count("stage2")?.unwrap_or(0)],
+            rays: [self.count("cache_rays")?.unwrap_or(0), self.count("render_rays")?.unwrap_or(0)],
+            peak_memory_bytes: self.count("peak_memory_bytes")?,
+            record_bytes: self.count("record_bytes")?.unwrap_or(0),
+            sigma_a_deg: self.number("sigma_a_deg")?,
+            reference_s: self.number("reference_s")?.unwrap_or(f64::NAN),
+        })
     }
-    Ok(records)
 }
 
 /// The line at the top of a generated `tables.md`: what wrote it and the command that writes it again.
