@@ -226,23 +226,22 @@ impl CsvLine<'_> {
 
     /// A number; `None` for an empty field or a missing column (a run that measured nothing).
     fn number(&self, name: &str) -> Result<Option<f64>> {
-        match self.get(name) {
-            None | Some((_, "")) => Ok(None),
-            Some((c, v)) => v
-                .parse::<f64>()
-                .map(Some)
-                .map_err(|_| (self.at)(self.line, c, format!("expected {name} (a number), found \"{v}\""))),
-        }
+        self.parsed(name, "a number")
     }
 
     /// A whole number; `None` as for [`CsvLine::number`].
     fn count(&self, name: &str) -> Result<Option<u64>> {
+        self.parsed(name, "a whole number")
+    }
+
+    /// The field parsed as `T` (`what` names it in the error); `None` as for [`CsvLine::number`].
+    fn parsed<T: std::str::FromStr>(&self, name: &str, what: &str) -> Result<Option<T>> {
         match self.get(name) {
             None | Some((_, "")) => Ok(None),
             Some((c, v)) => v
-                .parse::<u64>()
+                .parse::<T>()
                 .map(Some)
-                .map_err(|_| (self.at)(self.line, c, format!("expected {name} (a whole number), found \"{v}\""))),
+                .map_err(|_| (self.at)(self.line, c, format!("expected {name} ({what}), found \"{v}\""))),
         }
     }
 
