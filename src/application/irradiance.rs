@@ -137,7 +137,7 @@ impl IrradianceCache {
             })
             .map(|u| u.map(|v| v.min(1.0 - f32::EPSILON / 2.0)))
             .collect();
-        IrradianceCache { dirs, norm, max_depth, output, reject_in_front: true, rho_u }
+        IrradianceCache { dirs, norm, max_depth, output, reject_in_front: REJECT_IN_FRONT.default(), rho_u }
     }
 
     /// E at `at` by the n² gathering paths; the luminance of each direction's radiance goes to

@@ -35,6 +35,53 @@ pub struct CompareArgs {
     /// Print one JSON object (metrics, sizes, HDR-FLIP exposures) instead of one line per metric.
     #[arg(long)]
     pub json: bool,
+    /// Compare only the block of W×H pixels whose top-left pixel is column X, row Y (from the top left).
+    /// An image that is already W×H pixels is taken as that block: pbrt writes only a crop window's pixels.
+    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_window)]
+    pub window: Option<Window>,
+}
+
+/// A block of pixels: `x`, `y` of its top-left pixel (row 0 at the top), `width`, `height`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Window {
+    /// Column of the block's left edge.
+    pub x: usize,
+    /// Row of the block's top edge.
+    pub y: usize,
+    /// Columns in the block (at least 1).
+    pub width: usize,
+    /// Rows in the block (at least 1).
+    pub height: usize,
+}
+
+/// Reads `X,Y,W,H` (four non-negative integers, W and H at least 1).
+fn parse_window(text: &str) -> std::result::Result<Window, String> {
+    let values: Vec<usize> = text
+        .split(',')
+        .map(|v| v.trim().parse::<usize>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| format!("expected X,Y,W,H (four non-negative integers), got {text:?}"))?;
+    match values[..] {
+        [x, y, width, height] if width > 0 && height > 0 => Ok(Window { x, y, width, height }),
+        _ => Err(format!("expected X,Y,W,H (four non-negative integers, W and H at least 1), got {text:?}")),
+    }
+}
+
+/// The window of `image`, or the image itself when it is already the window's size.
+fn windowed(image: Image, window: Option<Window>, path: &Path) -> Result<Image> {
+    let Some(w) = window else { return Ok(image) };
+    if (image.width, image.height) == (w.width, w.height) {
+        return Ok(image);
+    }
+    image.crop(w.x, w.y, w.width, w.height).ok_or_else(|| {
+        Error::file(
+            path,
+            format!(
+                "is {}×{} pixels: the window {},{},{},{} does not lie inside it",
+                image.width, image.height, w.x, w.y, w.width, w.height
+            ),
+        )
+    })
 }
 
 /// Runs the comparison and returns the text to print.
@@ -52,8 +99,8 @@ pub fn run(args: &CompareArgs) -> Result<String> {
     if wanted.is_empty() {
         return Err(Error::usage("--metric needs at least one of rmse, relmse, flip, ldrflip"));
     }
-    let test = image::read(&args.test)?;
-    let reference = image::read(&args.reference)?;
+    let test = windowed(image::read(&args.test)?, args.window, &args.test)?;
+    let reference = windowed(image::read(&args.reference)?, args.window, &args.reference)?;
     check_pair(&test, &reference, &args.test, &args.reference)?;
 
     let eval = metrics::evaluate(&test, &reference, &wanted)?;
@@ -160,6 +207,27 @@ mod tests {
         assert_eq!(format_value(1.5), "1.500000");
         assert_eq!(format_value(0.00001234567), "1.234567e-5");
         assert_eq!(format_value(f64::NAN), "NaN");
+    }
+
+    #[test]
+    fn a_window_is_four_integers_with_a_size() {
+        assert_eq!(parse_window("96,14,64,14"), Ok(Window { x: 96, y: 14, width: 64, height: 14 }));
+        assert!(parse_window("96,14,64").is_err());
+        assert!(parse_window("96,14,0,14").is_err());
+        assert!(parse_window("-1,14,64,14").is_err());
+    }
+
+    #[test]
+    fn a_window_crops_or_takes_an_image_of_its_size() {
+        let image = Image::from_pixels(3, 2, (0..6).map(|i| [i as f32; 3]).collect()).unwrap();
+        let window = Some(Window { x: 1, y: 1, width: 2, height: 1 });
+        let cropped = windowed(image.clone(), window, Path::new("a.pfm")).unwrap();
+        assert_eq!(cropped.pixels, vec![[4.0; 3], [5.0; 3]]);
+        let already = Image::from_pixels(2, 1, vec![[7.0; 3], [8.0; 3]]).unwrap();
+        assert_eq!(windowed(already.clone(), window, Path::new("b.pfm")).unwrap(), already);
+        let outside = Some(Window { x: 2, y: 0, width: 2, height: 1 });
+        let err = windowed(image, outside, Path::new("c.pfm")).unwrap_err().to_string();
+        assert!(err.contains("c.pfm") && err.contains("does not lie inside"), "{err}");
     }
 
     #[test]

@@ -88,6 +88,16 @@ impl Image {
         total.map(|t| t / n)
     }
 
+    /// The `width`×`height` block whose top-left pixel is column `x`, row `y`; `None` when it does not lie
+    /// inside the image.
+    pub fn crop(&self, x: usize, y: usize, width: usize, height: usize) -> Option<Image> {
+        if x.checked_add(width)? > self.width || y.checked_add(height)? > self.height {
+            return None;
+        }
+        let pixels = (y..y + height).flat_map(|row| &self.pixels[row * self.width + x..][..width]).copied().collect();
+        Some(Image { width, height, pixels })
+    }
+
     /// The first pixel (in row-major order) with a NaN or infinite channel: `(x, y, channel, value)`.
     pub fn first_non_finite(&self) -> Option<(usize, usize, usize, f32)> {
         self.pixels.iter().enumerate().find_map(|(i, p)| {

@@ -286,6 +286,14 @@ impl ParamDef<bool> {
     pub const fn bool(name: &'static str, default: bool, meaning: &'static str) -> Self {
         Self::with(name, "bool", DefaultValue::Bool(default), meaning)
     }
+
+    /// The declared default, for code that builds the value without reading a scene.
+    pub const fn default(&self) -> bool {
+        match self.row.default {
+            DefaultValue::Bool(b) => b,
+            _ => unreachable!(),
+        }
+    }
 }
 
 impl ParamDef<String> {

@@ -4,7 +4,7 @@
 # around the light (64×14 pixels), against pbrt-v3's own image of that window at 4096 samples. There the
 # ceiling gets no direct light (the emitter faces down), so a pixel's error is the estimate of how much of it
 # the emitter covers. Run from the repository root after `cargo build --release`; writes into $OUT
-# (default /tmp/cachert-edge-noise) and prints the table of edge_noise.py.
+# (default /tmp/cachert-edge-noise) and prints the table (results.md).
 set -euo pipefail
 SCENES=../shared/scenes/bitterli-cornell-box-v3
 V2=../shared/tools/pbrt-v2/pbrt
@@ -39,4 +39,25 @@ done
 for n in 1 2 4 8 16 32 64 128 256; do
   "$V2" --quiet --ncores "$n" --outfile "$OUT/v2-$n.pfm" "$OUT/crop64-v2.pbrt" > /dev/null 2>&1
 done
-python3 experiments/results/irc-edge-noise/edge_noise.py "$OUT"
+# The table: each image's RMSE over the window against the truth (`cachert compare --window`; an image that is
+# already the window's 64×14 is taken as it), written as its share of a 256×256 image's RMSE (× √(64·14 / 65536),
+# so it compares with the "RMSE share of light + border" column of experiments/results/irc-peer/peer.md), and per
+# renderer the runs' mean, sample sd, min and max.
+share() {
+  target/release/cachert compare --metric rmse --window 96,14,64,14 "$1" "$OUT/truth.pfm" |
+    awk '$1 == "rmse" { printf "%.9f\n", $2 * sqrt(64 * 14 / 65536) }'
+}
+row() {
+  local name=$1; shift
+  for f in "$@"; do share "$f"; done | awk -v name="$name" '
+    { v[NR] = $1; s += $1; if (NR == 1 || $1 < lo) lo = $1; if (NR == 1 || $1 > hi) hi = $1 }
+    END { m = s / NR; for (i = 1; i <= NR; i++) q += (v[i] - m) ^ 2
+          sd = NR > 1 ? sprintf("%.5f", sqrt(q / (NR - 1))) : "–"
+          printf "| %s | %d | %.5f | %s | %.5f | %.5f |\n", name, NR, m, sd, lo, hi }'
+}
+echo "| renderer (lowdiscrepancy, 64 samples) | runs | mean | sd | min | max |"
+echo "|---|---|---|---|---|---|"
+row "cachert, seeds 0–31" $(for s in $(seq 0 31); do echo "$OUT/cachert-$s.pfm"; done)
+row "pbrt-v2, --ncores 1–256" $(for n in 1 2 4 8 16 32 64 128 256; do echo "$OUT/v2-$n.pfm"; done)
+row "pbrt-v3 (no seed)" "$OUT/v3.pfm"
+row "cachert at 4096 samples, seeds 0–1 (the truth's own noise and any bias)" "$OUT/cachert-4096-0.pfm" "$OUT/cachert-4096-1.pfm"
