@@ -43,18 +43,25 @@ pub struct ShadingPoint {
     pub area_light: Option<u32>,
     /// The primitive seen (shadow rays from here skip it; see `scene::accel::PrimOrigin`).
     pub origin: Option<PrimOrigin>,
+    /// Whether `n` and `ng` (in that order) were flipped to face the camera: the surface's own normals are
+    /// the negated ones. [`ShadingPoint::interaction`] restores them, because pbrt-v3's BSDFs are not all
+    /// symmetric in the normal's side (plastic's Fresnel term reflects as from inside the dielectric when
+    /// the viewer is on the side of the shading normal) and one-sided emitters emit on one side only.
+    pub flipped: [bool; 2],
 }
 
 impl ShadingPoint {
-    /// The surface interaction at this point, its normals faced toward the camera (the side cache
-    /// applications shade); `None` for a point not made by a camera ray (no primitive).
+    /// The surface interaction at this point with the surface's own normals (as the camera ray's hit had
+    /// them, before `n` and `ng` were faced toward the camera), so that a BSDF or emitter built from it is
+    /// the one a per-pixel integrator sees; `None` for a point not made by a camera ray (no primitive).
     pub fn interaction(&self) -> Option<SurfaceInteraction> {
+        let own = |n: Vec3A, flipped: bool| if flipped { -n } else { n };
         Some(SurfaceInteraction {
             p: self.p,
             p_error: self.p_error,
             t: self.depth,
-            ng: self.ng,
-            ns: self.n,
+            ng: own(self.ng, self.flipped[1]),
+            ns: own(self.n, self.flipped[0]),
             dpdu: self.dpdu,
             uv: self.uv,
             material: self.material,
@@ -82,6 +89,7 @@ pub fn shading_point(scene: &Scene, p_film: [f32; 2]) -> Option<ShadingPoint> {
             p_error: si.p_error,
             n: face(si.ns),
             ng: face(si.ng),
+            flipped: [si.ns.dot(wo) < 0.0, si.ng.dot(wo) < 0.0],
             wo,
             depth: (si.p - cam).length(),
             dpdu: si.dpdu,

@@ -442,6 +442,7 @@ mod tests {
             material: 0,
             area_light: None,
             origin: None,
+            flipped: [false; 2],
         };
         let down = -Vec3A::Y;
         // The ceiling around the sample, near or far: never in front.

@@ -161,6 +161,7 @@ mod tests {
                 material: 0,
                 area_light: None,
                 origin: None,
+                flipped: [false; 2],
             })
         });
         let pts = collect(&g, 1.0);

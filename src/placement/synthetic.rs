@@ -85,6 +85,7 @@ pub fn cast(w: usize, h: usize, eye: Vec3A, at: Vec3A, prims: &[Prim], diagonal:
             material: 0,
             area_light: None,
             origin: None,
+            flipped: [false; 2],
         })
     })
 }
