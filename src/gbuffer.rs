@@ -51,6 +51,26 @@ pub struct ShadingPoint {
 }
 
 impl ShadingPoint {
+    /// The shading point of the hit `si`, seen from unit direction `wo` after a path of length `depth`
+    /// from the camera: its normals faced toward `wo`, with which ones were flipped recorded.
+    pub fn at_hit(si: &SurfaceInteraction, wo: Vec3A, depth: f32) -> ShadingPoint {
+        let face = |n: Vec3A| if n.dot(wo) < 0.0 { -n } else { n };
+        ShadingPoint {
+            p: si.p,
+            p_error: si.p_error,
+            n: face(si.ns),
+            ng: face(si.ng),
+            flipped: [si.ns.dot(wo) < 0.0, si.ng.dot(wo) < 0.0],
+            wo,
+            depth,
+            dpdu: si.dpdu,
+            uv: si.uv,
+            material: si.material,
+            area_light: si.area_light,
+            origin: Some(si.origin),
+        }
+    }
+
     /// The surface interaction at this point with the surface's own normals (as the camera ray's hit had
     /// them, before `n` and `ng` were faced toward the camera), so that a BSDF or emitter built from it is
     /// the one a per-pixel integrator sees; `None` for a point not made by a camera ray (no primitive).
@@ -82,22 +102,7 @@ pub fn shading_point(scene: &Scene, p_film: [f32; 2]) -> Option<ShadingPoint> {
             ray = si.spawn_ray(ray.d);
             continue;
         }
-        let wo = -ray.d.normalize();
-        let face = |n: Vec3A| if n.dot(wo) < 0.0 { -n } else { n };
-        return Some(ShadingPoint {
-            p: si.p,
-            p_error: si.p_error,
-            n: face(si.ns),
-            ng: face(si.ng),
-            flipped: [si.ns.dot(wo) < 0.0, si.ng.dot(wo) < 0.0],
-            wo,
-            depth: (si.p - cam).length(),
-            dpdu: si.dpdu,
-            uv: si.uv,
-            material: si.material,
-            area_light: si.area_light,
-            origin: Some(si.origin),
-        });
+        return Some(ShadingPoint::at_hit(&si, -ray.d.normalize(), (si.p - cam).length()));
     }
     None
 }

@@ -329,7 +329,9 @@ impl Application for IrradianceCache {
     fn plan(&self) -> CachePlan {
         let added_per_pixel =
             (self.output == Output::Full).then(|| PerPixelTerm { integrator: "directlighting", set: Vec::new() });
-        CachePlan { added_per_pixel, ..CachePlan::default() }
+        // The caches' indirect light is seen in mirrors and through glass too; the added per-pixel term
+        // (`directlighting`) already shows the environment and follows the same specular paths.
+        CachePlan { added_per_pixel, follow_specular: true, ..CachePlan::default() }
     }
 
     fn compute_record(

@@ -118,11 +118,25 @@ pub struct CachePlan {
     /// (irradiance caching's `output full`: the emitted and direct light that its caches, holding indirect
     /// light only, leave out).
     pub added_per_pixel: Option<PerPixelTerm>,
+    /// Whether camera paths follow perfect specular reflection and transmission (as pbrt-v3's
+    /// `directlighting` does) and the caches shade the first non-specular vertices, weighted by the
+    /// specular throughput: the light the application computes is seen in mirrors and through glass.
+    pub follow_specular: bool,
+    /// Whether a camera path that leaves the scene takes the infinite lights' radiance (and an emitter at a
+    /// purely specular vertex its emission): the application's image is everything the camera sees, not
+    /// only what reaches surfaces. Off where an added per-pixel term already shows it.
+    pub shows_environment: bool,
 }
 
 impl Default for CachePlan {
     fn default() -> Self {
-        CachePlan { dgs_geometry: true, shade_by_reference: None, added_per_pixel: None }
+        CachePlan {
+            dgs_geometry: true,
+            shade_by_reference: None,
+            added_per_pixel: None,
+            follow_specular: false,
+            shows_environment: false,
+        }
     }
 }
 
@@ -250,6 +264,20 @@ pub trait Application: Sync + Sized {
         stratum: Stratum,
         rays: &mut RayCounters,
     ) -> [f32; 3];
+
+    /// The application's per-sample estimate where no cache is near enough to a sample (a point seen in a
+    /// mirror or through glass, far from every cache): by default [`Application::reference`]; an
+    /// application whose reference is too costly per sample gives a cheaper unbiased estimator.
+    fn estimate(
+        &self,
+        cx: &Self::Prepared<'_>,
+        s: &ShadingPoint,
+        rng: &mut Rng,
+        stratum: Stratum,
+        rays: &mut RayCounters,
+    ) -> [f32; 3] {
+        self.reference(cx, s, rng, stratum, rays)
+    }
 
     /// Bytes `record` occupies, heap included (for the memory report; asked before and after
     /// [`Application::finish_record`]).

@@ -205,12 +205,13 @@ impl ImportanceCache {
         (0..TECHNIQUES).flat_map(|t| std::iter::repeat_n(LETTERS[t], (self.techniques[t] / per) as usize)).collect()
     }
 
-    /// The per-sample baselines: [`ImportanceCache::baseline_draws`] VPLs drawn uniformly or by flux,
-    /// averaged.
+    /// The per-sample baselines: [`ImportanceCache::baseline_draws`] VPLs drawn uniformly or by flux
+    /// (`sampling`), averaged.
     fn baseline(
         &self,
         cx: &Lit<'_>,
         x: &Receiver,
+        sampling: Sampling,
         rng: &mut Rng,
         stratum: Stratum,
         rays: &mut RayCounters,
@@ -221,7 +222,7 @@ impl ImportanceCache {
         let mut l = split.estimate(cx.scene, &cx.shading, &cx.vpls, x, k, rng, rays);
         for d in 0..k {
             let u = self.stratify.then(|| stratum.draw(STREAM_BASELINE, d, k));
-            let (j, p) = match self.sampling {
+            let (j, p) = match sampling {
                 Sampling::Uniform if n > 0 => {
                     let j = match u {
                         Some(u) => ((u as u128 * n as u128) >> 64) as usize,
@@ -330,7 +331,13 @@ impl Application for ImportanceCache {
             Sampling::Cache => None,
             s => Some(format!("\"sampling\" \"{}\" draws VPLs without caches", s.name())),
         };
-        CachePlan { dgs_geometry: false, shade_by_reference, ..CachePlan::default() }
+        CachePlan {
+            dgs_geometry: false,
+            shade_by_reference,
+            follow_specular: true,
+            shows_environment: true,
+            ..CachePlan::default()
+        }
     }
 
     fn compute_record(&self, cx: &Lit<'_>, at: &ShadingPoint, _: &mut Rng, rays: &mut RayCounters) -> ImportanceRecord {
@@ -439,8 +446,26 @@ impl Application for ImportanceCache {
         if let Some(x) = cx.receiver(s) {
             l += match self.sampling {
                 Sampling::Cache => (0..cx.vpls.len()).map(|j| cx.contribution(j, &x, rays)).sum(),
-                _ => self.baseline(cx, &x, rng, stratum, rays),
+                _ => self.baseline(cx, &x, self.sampling, rng, stratum, rays),
             };
+        }
+        l.to_array()
+    }
+
+    /// Where no cache serves a sample (a point seen in a mirror or through glass, away from every cache):
+    /// power sampling with as many draws as the techniques make, which is unbiased for the same VPL sum,
+    /// rather than the reference's exact sum over every VPL.
+    fn estimate(
+        &self,
+        cx: &Lit<'_>,
+        s: &ShadingPoint,
+        rng: &mut Rng,
+        stratum: Stratum,
+        rays: &mut RayCounters,
+    ) -> [f32; 3] {
+        let mut l = cx.emitted(s);
+        if let Some(x) = cx.receiver(s) {
+            l += self.baseline(cx, &x, Sampling::Power, rng, stratum, rays);
         }
         l.to_array()
     }

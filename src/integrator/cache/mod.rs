@@ -7,6 +7,7 @@
 //! Depends on `application` (the trait and registry), `placement`, `cache`, `gbuffer` and `scene`; no module
 //! here names a particular application.
 
+pub mod camera_path;
 pub mod run;
 pub mod settings;
 pub mod stats;

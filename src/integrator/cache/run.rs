@@ -16,7 +16,7 @@ use rayon::prelude::*;
 use crate::application::{Application, Neighbour};
 use crate::cache::{CacheIndex, GroupScratch};
 use crate::error::{Error, Result};
-use crate::gbuffer::{GBuffer, PixelId, shading_point};
+use crate::gbuffer::{GBuffer, PixelId};
 use crate::image::Image;
 use crate::placement::{CacheId, CacheOracle, registry};
 use crate::sampling::rng::{hash3, mix64};
@@ -25,9 +25,11 @@ use crate::sampling::{Rng, Stratum};
 use crate::scene::Scene;
 use crate::scene::ray::RayCounters;
 
+use super::camera_path::{CameraPaths, PathCounts, Vertex};
 use super::settings::{CacheSettings, Placement};
 use super::stats::{CacheStats, StageTimes};
 use crate::os::{available_memory_bytes, peak_memory_bytes};
+use crate::shading::Spectrum;
 
 /// What a cache-based render produced besides the image.
 #[derive(Clone, Debug)]
@@ -175,6 +177,7 @@ pub fn render_cached<A: Application>(
         bar: bar(s.progress, s.caches.min(g.valid_count) as u64, "caches"),
     };
     let mut cache_points = Vec::new();
+    let mut radii = Vec::new();
     if let (Placement::Strategy(name), true) = (s.placement, g.valid_count > 0) {
         let strategy = registry::strategy(name)?;
         let total = budget(app, s, g.valid_count, &mut stats)?;
@@ -189,17 +192,19 @@ pub fn render_cached<A: Application>(
         stats.record_bytes = store.records.iter().map(|r| app.record_bytes(r)).sum();
         let t = Instant::now();
         let keep = s.params.lookup.keep;
-        store.records.par_iter_mut().enumerate().for_each(|(id, r)| {
-            app.finish_record(cx, r, index.region_radius(id as u32, keep));
-        });
+        radii = (0..store.records.len() as u32).into_par_iter().map(|id| index.region_radius(id, keep)).collect();
+        store.records.par_iter_mut().zip(&radii).for_each(|(r, &radius)| app.finish_record(cx, r, radius));
         times.finish_records = t.elapsed().as_secs_f64();
         stats.record_bytes_kept = store.records.iter().map(|r| app.record_bytes(r)).sum();
         index_and_store = Some(index);
     }
     stats.cache_rays = store.rays;
     let t = Instant::now();
-    let caches = Caches { index: index_and_store.as_ref(), records: &store.records, points: &cache_points };
-    let (image, render_rays) = shade_image(scene, app, cx, s, &caches, none);
+    let caches =
+        Caches { index: index_and_store.as_ref(), records: &store.records, points: &cache_points, radii: &radii };
+    let paths = CameraPaths::new(scene, &app.plan())?;
+    let (image, render_rays, path_counts) = shade_image(scene, app, cx, s, &caches, &paths, none);
+    stats.camera_paths = path_counts;
     times.render = t.elapsed().as_secs_f64();
     stats.render_rays = render_rays;
     stats.total_caches = store.records.len();
@@ -279,90 +284,144 @@ fn place<A: Application>(
     Ok(discontinuity)
 }
 
-/// The evaluated caches as shading reads them: the lookup index, the records and each cache's (p, n).
+/// The evaluated caches as shading reads them: the lookup index, the records, each cache's (p, n) and the
+/// radius of the region it serves (its distance to its `keep`-th nearest cache).
 struct Caches<'a, R> {
     index: Option<&'a CacheIndex>,
     records: &'a [R],
     points: &'a [(Vec3A, Vec3A)],
+    radii: &'a [f32],
 }
 
-/// Shades every sub-pixel sample (box filter over the pixel): from the caches, or by the reference.
+impl<R> Caches<'_, R> {
+    /// Whether cache `id` is near enough to shade a point at (`p`, `n`) that a specular bounce led to (not
+    /// placed for it): within the region it serves, on the same side.
+    fn serves(&self, id: u32, p: Vec3A, n: Vec3A) -> bool {
+        let (cp, cn) = self.points[id as usize];
+        (cp - p).length() <= self.radii.get(id as usize).copied().unwrap_or(0.0) && cn.dot(n) > 0.0
+    }
+}
+
+/// Stage tag of the random streams of a sample's camera-path vertices after its first.
+const STAGE_VERTEX: u64 = 0x7665_7274;
+
+/// `v` times the specular throughput `w`, channel by channel.
+fn weighted(v: [f32; 3], w: Spectrum) -> [f32; 3] {
+    let w = w.to_array();
+    [v[0] * w[0], v[1] * w[1], v[2] * w[2]]
+}
+
+/// Shades every sub-pixel sample (box filter over the pixel): each vertex its camera path hands over
+/// ([`CameraPaths`]) from the caches, or by the reference; a vertex after a specular bounce that no cache
+/// serves ([`Caches::serves`]) by the application's per-sample estimator. Returns the image, the rays and
+/// what the paths did.
 fn shade_image<A: Application>(
     scene: &Scene,
     app: &A,
     cx: &A::Prepared<'_>,
     s: &CacheSettings,
     caches: &Caches<'_, A::Record>,
+    paths: &CameraPaths<'_>,
     reference: bool,
-) -> (Image, RayCounters) {
+) -> (Image, RayCounters, PathCounts) {
     let b = scene.film.cropped_bounds();
     let [w, h] = b.size();
     let n = s.subpixels.max(1);
+    let eye = scene.camera.position();
     let pb = bar(s.progress, h as u64, if reference { "reference" } else { "render" });
-    let rows: Vec<(Vec<[f32; 3]>, RayCounters)> = (0..h)
+    let rows: Vec<(Vec<[f32; 3]>, RayCounters, PathCounts)> = (0..h)
         .into_par_iter()
         .map(|row| {
             let mut out = vec![[0.0f32; 3]; w];
             let mut rays = RayCounters::default();
+            let mut counts = PathCounts::default();
             let (mut weights, mut blend) = (Vec::new(), Vec::new());
-            let (mut points, mut queries) = (Vec::new(), Vec::new());
+            let (mut points, mut queries, mut vertices) = (Vec::new(), Vec::new(), Vec::new());
             let mut lookup = GroupScratch::default();
             let y = b.min[1] + row as i32;
             let key = |x: i32, i: u32| sample_key(x, y, i);
             for first in (0..w).step_by(GROUP_PIXELS) {
-                // The sub-pixel shading points of a run of pixels, looked up in the index as one group (the
-                // same selections as one lookup each, several times faster).
+                // The vertices of a run of pixels' sub-pixel samples, looked up in the index as one group
+                // (the same selections as one lookup each, several times faster).
                 points.clear();
-                for col in first..(first + GROUP_PIXELS).min(w) {
+                let end = (first + GROUP_PIXELS).min(w);
+                for (col, px) in out.iter_mut().enumerate().take(end).skip(first) {
                     let x = b.min[0] + col as i32;
                     for i in 0..n {
                         let u = subpixel(x, y, i);
-                        rays.camera += 1;
-                        if let Some(sp) = shading_point(scene, [x as f32 + u[0], y as f32 + u[1]]) {
-                            let stratum = Stratum::new(s.seed, key(x, 0), i, n);
-                            points.push((col, key(x, i), stratum, sp));
+                        let ray = scene.camera.generate_ray([x as f32 + u[0], y as f32 + u[1]], [0.5, 0.5]);
+                        let gathered = paths.trace(ray, eye, &mut vertices, &mut counts, &mut rays);
+                        if gathered != Spectrum::ZERO {
+                            let g = gathered.to_array();
+                            (0..3).for_each(|c| px[c] += g[c]);
+                        }
+                        let stratum = Stratum::new(s.seed, key(x, 0), i, n);
+                        for v in &vertices {
+                            let k =
+                                if v.index == 0 { key(x, i) } else { hash3(STAGE_VERTEX, key(x, i), v.index as u64) };
+                            points.push(Shade { col, key: k, stratum, vertex: *v });
                         }
                     }
                 }
                 let mut add = |col: usize, v: [f32; 3]| (0..3).for_each(|k| out[col][k] += v[k]);
                 if reference {
-                    for &(col, k, stratum, sp) in &points {
-                        let mut rng = Rng::keyed(s.seed, STAGE_SHADE, k);
-                        add(col, app.reference(cx, &sp, &mut rng, stratum, &mut rays));
+                    for p in &points {
+                        let mut rng = Rng::keyed(s.seed, STAGE_SHADE, p.key);
+                        let v = app.reference(cx, &p.vertex.point, &mut rng, p.stratum, &mut rays);
+                        add(p.col, weighted(v, p.vertex.weight));
                     }
                 } else if let Some(index) = caches.index {
                     queries.clear();
-                    queries.extend(points.iter().map(|(_, _, _, sp)| (sp.p, sp.n)));
+                    queries.extend(points.iter().map(|p| (p.vertex.point.p, p.vertex.point.n)));
                     index.select_group_in(&queries, &mut lookup, |j, near| {
-                        let (col, k, stratum, sp) = &points[j];
+                        let p = &points[j];
+                        let sp = &p.vertex.point;
                         index.interpolate_weights(near, &mut weights);
+                        if p.vertex.bounces > 0 && !weights.iter().any(|&(id, _)| caches.serves(id, sp.p, sp.n)) {
+                            weights.clear();
+                        }
                         blend.clear();
                         blend.extend(weights.iter().map(|&(id, weight)| {
                             let (p, n) = caches.points[id as usize];
                             Neighbour { record: &caches.records[id as usize], p, n, weight }
                         }));
+                        let mut rng = Rng::keyed(s.seed, STAGE_SHADE, p.key);
                         if !blend.is_empty() {
-                            let mut rng = Rng::keyed(s.seed, STAGE_SHADE, *k);
-                            add(*col, app.shade(cx, sp, &blend, &mut rng, *stratum, &mut rays));
+                            let v = app.shade(cx, sp, &blend, &mut rng, p.stratum, &mut rays);
+                            add(p.col, weighted(v, p.vertex.weight));
+                        } else if p.vertex.bounces > 0 {
+                            counts.by_estimator += 1;
+                            let v = app.estimate(cx, sp, &mut rng, p.stratum, &mut rays);
+                            add(p.col, weighted(v, p.vertex.weight));
                         }
                     });
                 }
             }
             out.iter_mut().for_each(|px| *px = px.map(|v| v / n as f32));
             pb.inc(1);
-            (out, rays)
+            (out, rays, counts)
         })
         .collect();
     pb.finish_and_clear();
     let mut img = Image::new(w, h);
     let mut rays = RayCounters::default();
-    for (y, (row, r)) in rows.into_iter().enumerate() {
+    let mut counts = PathCounts::default();
+    for (y, (row, r, c)) in rows.into_iter().enumerate() {
         for (x, c) in row.into_iter().enumerate() {
             img.set(x, y, c);
         }
         rays.add(&r);
+        counts.add(&c);
     }
-    (img, rays)
+    (img, rays, counts)
+}
+
+/// One vertex to shade: its pixel's column in the row, its random stream's key, its sample's stratum.
+struct Shade {
+    col: usize,
+    key: u64,
+    stratum: Stratum,
+    vertex: Vertex,
 }
 
 #[cfg(test)]

@@ -3,6 +3,7 @@
 
 use serde::Serialize;
 
+use super::camera_path::PathCounts;
 use crate::placement::PlacementInfo;
 use crate::scene::ray::RayCounters;
 
@@ -86,6 +87,9 @@ pub struct CacheStats {
     /// What the application prepared from the scene (`Application::prepared_report`: e.g. the VPLs
     /// generated).
     pub prepared: serde_json::Map<String, serde_json::Value>,
+    /// What the camera paths did: specular bounces followed, vertices shaded after them, those shaded by
+    /// the per-sample estimator, paths that left the scene.
+    pub camera_paths: PathCounts,
     /// Remarks (budget above the valid pixels, …).
     pub notes: Vec<String>,
 }
@@ -134,6 +138,18 @@ impl CacheStats {
         }
         if let Some(th) = self.placement.sd_threshold {
             s += &format!("\nSD: threshold {th:.5} after {} search iterations", self.placement.search_iterations);
+        }
+        let c = &self.camera_paths;
+        if c.specular_bounces > 0 || c.by_estimator > 0 {
+            s += &format!(
+                "\ncamera paths: {} samples, {} specular bounces, {} vertices after one ({} shaded from caches, {} by the per-sample estimator), {} left the scene",
+                c.samples,
+                c.specular_bounces,
+                c.after_specular,
+                c.after_specular.saturating_sub(c.by_estimator),
+                c.by_estimator,
+                c.escaped
+            );
         }
         if !self.prepared.is_empty() {
             let items: Vec<String> = self.prepared.iter().map(|(k, v)| format!("{k} {v}")).collect();

@@ -126,6 +126,17 @@ pub enum Compiled {
 }
 
 impl Compiled {
+    /// Whether this material can add a perfectly specular lobe (for a mix, whether either part can, given
+    /// theirs): smooth glass, mirrors and uber's Kr and Kt. Conservative: smooth glass made rough by a
+    /// texture still counts.
+    pub fn may_be_specular(&self, specular_of: impl Fn(u32) -> bool) -> bool {
+        match self {
+            Compiled::Mirror { .. } | Compiled::Glass { .. } | Compiled::Uber { .. } => true,
+            Compiled::Mix { materials, .. } => specular_of(materials[0]) || specular_of(materials[1]),
+            _ => false,
+        }
+    }
+
     /// The most lobes this material adds to a BSDF (for a mix, the sum of its parts, given theirs).
     pub fn max_lobes(&self, lobes_of: impl Fn(u32) -> usize) -> usize {
         match self {

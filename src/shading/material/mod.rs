@@ -22,6 +22,8 @@ use scatter::MaterialHit;
 #[derive(Debug, Default)]
 pub struct Materials {
     compiled: Vec<Compiled>,
+    /// Per material, whether its BSDF can have a perfectly specular lobe ([`Compiled::may_be_specular`]).
+    specular: Vec<bool>,
     type_names: Vec<String>,
     counted: Vec<bool>,
 }
@@ -49,11 +51,22 @@ impl Materials {
                 }
             }
         }
+        let mut specular = vec![false; compiled.len()];
+        for (i, c) in compiled.iter().enumerate() {
+            specular[i] = c.may_be_specular(|id| specular.get(id as usize).copied().unwrap_or(false));
+        }
         Ok(Materials {
             compiled,
+            specular,
             type_names: scene.materials.iter().map(|m| m.type_name.clone()).collect(),
             counted: scene.materials.iter().map(|m| m.loc.is_some()).collect(),
         })
+    }
+
+    /// Whether material `id`'s BSDF can have a perfectly specular lobe (false for an unknown id).
+    #[inline]
+    pub fn may_be_specular(&self, id: u32) -> bool {
+        self.specular.get(id as usize).copied().unwrap_or(false)
     }
 
     /// The BSDF of material `id` at `si` as pbrt-v3's `path` integrator builds it (`allowMultipleLobes`:
