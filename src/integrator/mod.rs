@@ -14,6 +14,7 @@ use crate::error::{Error, Result, Warnings};
 use crate::image::Image;
 use crate::parse::integrator::{IntegratorParams, report_unused};
 use crate::parse::{Named, ParamList};
+use crate::render::film::apply_scale;
 use crate::render::{INTEGRATORS, RayCounters, per_pixel_integrator, render_image, with_threads};
 use crate::scene::Scene;
 
@@ -69,7 +70,8 @@ fn not_implemented(name: &str) -> Error {
     ))
 }
 
-/// Builds the integrator named by the scene (or by `settings.integrator`) and renders.
+/// Builds the integrator named by the scene (or by `settings.integrator`) and renders. The image has the
+/// Film's `scale` and `maxsampleluminance` applied (`render::film`), whichever integrator made it.
 pub fn render(
     scene: &Scene,
     integrator: Option<&Named>,
@@ -117,13 +119,16 @@ pub fn render(
     iparams.check_overrides()?;
     report_unused(integrator, name, &settings.set, warnings);
     let run = || render_image(scene, &sampler, pixel.as_ref(), settings.seed, settings.progress);
-    let (image, rays, render_secs) = with_threads(settings.threads, run)?;
+    let (mut image, rays, render_secs) = with_threads(settings.threads, run)?;
+    apply_scale(&mut image, &scene.film);
     Ok(RenderOutput { image, rays, render_secs, spp: sampler.spp, integrator: name.to_string(), cache: None })
 }
 
 /// Renders the per-pixel integrator `name` with parameters `set` only (the scene's `Integrator` line is
 /// not read) with the scene's Sampler and PixelFilter — `--spp` and `--quick` apply — for a cache
 /// application's per-pixel term. Runs in the current thread pool; returns the image, rays and wall time.
+/// Its samples are clamped to the Film's `maxsampleluminance`; the image is not scaled by the Film's
+/// `scale`, which the cache driver applies once to the sum.
 pub(crate) fn render_per_pixel_term(
     scene: &Scene,
     name: &str,

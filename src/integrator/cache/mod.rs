@@ -23,10 +23,13 @@ use crate::scene::{Scene, filter};
 use super::{RenderOutput, RenderSettings, render_per_pixel_term};
 use crate::parse::integrator::report_unused;
 use crate::parse::integrator::{IntegratorParams, help_text};
+use crate::render::film::apply_scale;
 use crate::render::with_threads;
 
 /// Renders `scene` with cache application `A`: the scene's `Integrator` parameters (when it names `A`)
-/// and `settings.set` give both the generic and `A`'s parameters; `settings.cache` wins over them.
+/// and `settings.set` give both the generic and `A`'s parameters; `settings.cache` wins over them. Every
+/// sample is clamped to the Film's `maxsampleluminance` and the finished image (with `A`'s per-pixel term,
+/// if it adds one) is multiplied by the Film's `scale` once, as for the per-pixel integrators.
 pub fn render_with<A: Application>(
     scene: &Scene,
     integrator: Option<&Named>,
@@ -65,6 +68,12 @@ pub fn render_with<A: Application>(
         if let Some(why) = &without_caches {
             out.stats.notes.push(format!("{why}: every sample is shaded without caches (placement none)"));
         }
+        // Both parts clamp their own samples to the Film's maxsampleluminance (the per-pixel term in its
+        // pixel loop, the cached part in `shade_image`). pbrt-v3 would clamp each sample's sum of the two;
+        // this differs from it only for samples where the sum is over the limit while both parts add light
+        // (in practice where both are bright at once): a part under the limit passes whole. The two parts
+        // do not share samples (the term has the Sampler's, the cached part its sub-pixel positions), so the
+        // sum's clamp cannot be reproduced.
         if let Some(term) = &term {
             let w = &mut run_warnings;
             let (image, rays, secs) = render_per_pixel_term(scene, term.integrator, &term.set, settings, w)?;
@@ -78,6 +87,8 @@ pub fn render_with<A: Application>(
                 term.set.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", ")
             ));
         }
+        // The Film's scale, once, on the whole image (the per-pixel term is unscaled until here).
+        apply_scale(&mut out.image, &scene.film);
         Ok(out)
     };
     let out = with_threads(settings.threads, run);
@@ -131,9 +142,9 @@ pub fn help() -> String {
 
 /// The sample settings a cache-based render honours and the ones it cannot, said aloud: `--spp` (and
 /// `--quick`'s one sample per pixel) become the sub-pixel sample count unless `subpixels` is set; the scene's
-/// Sampler and PixelFilter, and the Film's `scale` and `maxsampleluminance`, are not used (the driver shades
-/// `subpixels` jittered positions per pixel and averages them), each with a warning where it was written.
-/// Returns `settings.cache` with the honoured sub-pixel count added.
+/// Sampler and PixelFilter are not used (the driver shades `subpixels` jittered positions per pixel and
+/// averages them), each with a warning where it was written. (The Film's `scale` and `maxsampleluminance`
+/// are honoured: [`render_with`].) Returns `settings.cache` with the honoured sub-pixel count added.
 fn cache_sample_settings(
     scene: &Scene,
     params: &ParamList,
@@ -152,8 +163,8 @@ fn cache_sample_settings(
         None => {}
     }
     let per_pixel = "it shades \"subpixels\" jittered positions per pixel (set it, or --spp)";
-    // A per-pixel term renders with the scene's Sampler, PixelFilter and Film settings: only the cached
-    // part leaves them out.
+    // A per-pixel term renders with the scene's Sampler and PixelFilter: only the cached part leaves them
+    // out.
     if !per_pixel_term {
         if let Some(loc) = &scene.declared.sampler {
             let name = &scene.sampler.name;
@@ -166,14 +177,6 @@ fn cache_sample_settings(
                 "PixelFilter is not used by cache-based integrators: the sub-pixel samples of a pixel are averaged (a box filter of radius 0.5)",
             );
         }
-    }
-    let which = if per_pixel_term { "to the cached light" } else { "by cache-based integrators" };
-    if scene.film.scale != 1.0 {
-        warnings.general(format!("Film \"scale\" {} is not applied {which}", scene.film.scale));
-    }
-    if scene.film.max_sample_luminance.is_finite() {
-        warnings
-            .general(format!("Film \"maxsampleluminance\" {} is not applied {which}", scene.film.max_sample_luminance));
     }
     o
 }

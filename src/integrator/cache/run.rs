@@ -19,6 +19,7 @@ use crate::error::{Error, Result};
 use crate::gbuffer::{GBuffer, PixelId, shading_point};
 use crate::image::Image;
 use crate::placement::{CacheId, CacheOracle, registry};
+use crate::render::film::clamp_sample_luminance;
 use crate::sampling::rng::{hash3, mix64};
 use crate::sampling::sequence::sobol02;
 use crate::sampling::{Rng, Stratum};
@@ -286,7 +287,8 @@ struct Caches<'a, R> {
     points: &'a [(Vec3A, Vec3A)],
 }
 
-/// Shades every sub-pixel sample (box filter over the pixel): from the caches, or by the reference.
+/// Shades every sub-pixel sample (box filter over the pixel): from the caches, or by the reference. Each
+/// sample is clamped to the Film's `maxsampleluminance` as it is added, as pbrt-v3's `Film::AddSample` does.
 fn shade_image<A: Application>(
     scene: &Scene,
     app: &A,
@@ -324,7 +326,10 @@ fn shade_image<A: Application>(
                         }
                     }
                 }
-                let mut add = |col: usize, v: [f32; 3]| (0..3).for_each(|k| out[col][k] += v[k]);
+                let mut add = |col: usize, v: [f32; 3]| {
+                    let v = clamp_sample_luminance(v, scene.film.max_sample_luminance);
+                    (0..3).for_each(|k| out[col][k] += v[k])
+                };
                 if reference {
                     for &(col, k, stratum, sp) in &points {
                         let mut rng = Rng::keyed(s.seed, STAGE_SHADE, k);
