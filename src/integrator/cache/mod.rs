@@ -14,13 +14,15 @@ pub mod stats;
 pub use run::{CachedOutput, render_cached};
 pub use settings::{CacheOverrides, CacheSettings, PARAMETERS, Placement};
 
-use crate::application::Application;
 use crate::application::registry::{APPLICATIONS, WithApplication};
+use crate::application::{Application, PerPixelTerm};
 use crate::error::{Result, Warnings};
+use crate::image::Image;
 use crate::parse::{Named, ParamList};
+use crate::scene::ray::RayCounters;
 use crate::scene::{Scene, filter};
 
-use super::{RenderOutput, RenderSettings, render_per_pixel_term};
+use super::{Pass, RenderOutput, RenderSettings, render_per_pixel_term};
 use crate::parse::integrator::report_unused;
 use crate::parse::integrator::{IntegratorParams, help_text};
 use crate::render::film::apply_scale;
@@ -36,6 +38,20 @@ pub fn render_with<A: Application>(
     settings: &RenderSettings,
     warnings: &mut Warnings,
 ) -> Result<RenderOutput> {
+    let out = render_pass::<A>(scene, integrator, settings, warnings, Pass::Render)?;
+    Ok(out.expect("a render pass returns an image"))
+}
+
+/// [`render_with`], or for [`Pass::DryRun`] the same steps up to shading — parameters, the settings a
+/// cache render cannot use, `A`'s preparation and its per-pixel term's integrator — for their warnings
+/// and errors, returning `None`.
+fn render_pass<A: Application>(
+    scene: &Scene,
+    integrator: Option<&Named>,
+    settings: &RenderSettings,
+    warnings: &mut Warnings,
+    pass: Pass,
+) -> Result<Option<RenderOutput>> {
     let empty = ParamList::default();
     let params = match integrator {
         Some(n) if n.name == A::NAME => &n.params,
@@ -57,16 +73,21 @@ pub fn render_with<A: Application>(
     p.check_overrides()?;
     report_unused(integrator, A::NAME, &settings.set, warnings);
     let mut run_warnings = Warnings::default();
-    let run = || -> Result<CachedOutput> {
+    let run = || -> Result<Option<CachedOutput>> {
         let start = std::time::Instant::now();
         let cx = app.prepare(scene, &mut run_warnings)?;
         let prepare_secs = start.elapsed().as_secs_f64();
-        let mut out = render_cached(scene, &app, &cx, &cs)?;
-        out.stats.times.prepare = prepare_secs;
-        out.stats.times.total += prepare_secs;
-        out.stats.prepared = app.prepared_report(&cx).into_iter().map(|(k, v)| (k.to_string(), v)).collect();
-        if let Some(why) = &without_caches {
-            out.stats.notes.push(format!("{why}: every sample is shaded without caches (placement none)"));
+        let mut out = match pass {
+            Pass::Render => Some(render_cached(scene, &app, &cx, &cs)?),
+            Pass::DryRun => None,
+        };
+        if let Some(out) = &mut out {
+            out.stats.times.prepare = prepare_secs;
+            out.stats.times.total += prepare_secs;
+            out.stats.prepared = app.prepared_report(&cx).into_iter().map(|(k, v)| (k.to_string(), v)).collect();
+            if let Some(why) = &without_caches {
+                out.stats.notes.push(format!("{why}: every sample is shaded without caches (placement none)"));
+            }
         }
         // Both parts clamp their own samples to the Film's maxsampleluminance (the per-pixel term in its
         // pixel loop, the cached part in `shade_image`). pbrt-v3 would clamp each sample's sum of the two;
@@ -76,38 +97,48 @@ pub fn render_with<A: Application>(
         // sum's clamp cannot be reproduced.
         if let Some(term) = &term {
             let w = &mut run_warnings;
-            let (image, rays, secs) = render_per_pixel_term(scene, term.integrator, &term.set, settings, w)?;
-            out.image.add(&image);
-            out.stats.render_rays.add(&rays);
-            out.stats.times.per_pixel_term = secs;
-            out.stats.times.total += secs;
-            out.stats.notes.push(format!(
-                "the image adds {} ({}) rendered with the scene's Sampler and PixelFilter",
-                term.integrator,
-                term.set.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", ")
-            ));
+            let rendered = render_per_pixel_term(scene, term.integrator, &term.set, settings, w, pass)?;
+            if let (Some(out), Some(rendered)) = (&mut out, rendered) {
+                add_term(out, term, rendered);
+            }
         }
-        // The Film's scale, once, on the whole image (the per-pixel term is unscaled until here).
-        apply_scale(&mut out.image, &scene.film);
+        if let Some(out) = &mut out {
+            // The Film's scale, once, on the whole image (the per-pixel term is unscaled until here).
+            apply_scale(&mut out.image, &scene.film);
+        }
         Ok(out)
     };
     let out = with_threads(settings.threads, run);
     // Kept whether or not the render succeeded (a failing scene's warnings still say what was read).
     warnings.extend(run_warnings);
-    let out = out??;
+    let Some(out) = out?? else { return Ok(None) };
     let mut rays = out.stats.cache_rays;
     rays.add(&out.stats.render_rays);
-    Ok(RenderOutput {
+    Ok(Some(RenderOutput {
         image: out.image.clone(),
         rays,
         render_secs: out.stats.times.total,
         spp: cs.subpixels,
         integrator: format!("{}, placement {}", A::NAME, cs.placement),
         cache: Some(Box::new(out)),
-    })
+    }))
 }
 
-/// [`render_with`] as a registry visitor: `integrator::render` dispatches an integrator name through it.
+/// Adds the per-pixel term's image, rays and time to the cached render, with a note naming it.
+fn add_term(out: &mut CachedOutput, term: &PerPixelTerm, (image, rays, secs): (Image, RayCounters, f64)) {
+    out.image.add(&image);
+    out.stats.render_rays.add(&rays);
+    out.stats.times.per_pixel_term = secs;
+    out.stats.times.total += secs;
+    out.stats.notes.push(format!(
+        "the image adds {} ({}) rendered with the scene's Sampler and PixelFilter",
+        term.integrator,
+        term.set.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", ")
+    ));
+}
+
+/// [`render_with`] (or its dry run) as a registry visitor: `integrator::render` and `integrator::dry_run`
+/// dispatch an integrator name through it.
 pub struct CacheRender<'a, 'w> {
     /// The scene.
     pub scene: &'a Scene,
@@ -117,12 +148,14 @@ pub struct CacheRender<'a, 'w> {
     pub settings: &'a RenderSettings,
     /// Where warnings go.
     pub warnings: &'w mut Warnings,
+    /// Render, or stop before shading.
+    pub pass: Pass,
 }
 
 impl WithApplication for CacheRender<'_, '_> {
-    type Output = Result<RenderOutput>;
-    fn apply<A: Application>(self) -> Result<RenderOutput> {
-        render_with::<A>(self.scene, self.integrator, self.settings, self.warnings)
+    type Output = Result<Option<RenderOutput>>;
+    fn apply<A: Application>(self) -> Result<Option<RenderOutput>> {
+        render_pass::<A>(self.scene, self.integrator, self.settings, self.warnings, self.pass)
     }
 }
 
