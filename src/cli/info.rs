@@ -1,7 +1,9 @@
 //! `cachert info`: what a scene file loads to — shapes, triangles, instances, lights, materials, bounds,
-//! warnings and the time each loading stage took. The warnings are those of loading and of the shading
-//! set-up (textures, materials, lights) that every shading integrator builds before its first pixel: an
-//! unsupported material rendered as matte, an unreadable environment map, a zero-power light.
+//! warnings and the time each loading stage took. The warnings are every one `cachert render SCENE` prints:
+//! those of loading, then the integrator's, from `integrator::dry_run` — the render's own code path stopped
+//! before the first pixel (parameters unused, scene settings a cache-based integrator cannot use, the
+//! shading set-up: an unsupported material rendered as matte, an unreadable environment map, a zero-power
+//! light). For an integrator cachert does not implement (render refuses it), the shading set-up's.
 
 use std::fmt::Write;
 use std::path::PathBuf;
@@ -19,7 +21,7 @@ pub struct InfoArgs {
 /// Runs `cachert info` and returns the report.
 pub fn run(args: &InfoArgs) -> Result<String> {
     let mut l = load(&args.scene, LoadOptions::default())?;
-    shading_warnings(&l.scene, &mut l.warnings)?;
+    integrator_warnings(&l.scene, l.integrator.as_ref(), &mut l.warnings)?;
     let (s, st) = (&l.scene, &l.stats);
     let mut o = String::new();
     let _ = writeln!(o, "scene       {}", s.source.display());
@@ -87,8 +89,28 @@ pub fn run(args: &InfoArgs) -> Result<String> {
     Ok(o)
 }
 
+/// The warnings `cachert render` adds to loading's for the scene's integrator (and its errors before the
+/// first pixel: what render refuses, info refuses too), from the render's own code path
+/// (`integrator::dry_run`, default settings as `render SCENE` has). An integrator cachert does not
+/// implement gives the shading set-up's warnings instead, which any integrator chosen in its place with
+/// `--integrator` (except `ambientocclusion`) would print.
+fn integrator_warnings(
+    scene: &crate::scene::Scene,
+    integrator: Option<&crate::parse::Named>,
+    warnings: &mut crate::error::Warnings,
+) -> Result<()> {
+    let name = integrator.map_or("path", |n| n.name.as_str());
+    let implemented = crate::render::INTEGRATORS.contains(&name) || crate::application::registry::entry(name).is_some();
+    if implemented {
+        let settings = crate::integrator::RenderSettings::default();
+        crate::integrator::dry_run(scene, integrator, &settings, warnings)
+    } else {
+        shading_warnings(scene, warnings)
+    }
+}
+
 /// Builds the scene's textures, materials and lights as a shading integrator does, for their warnings (and
-/// their errors: a value that render refuses, info refuses too).
+/// their errors).
 fn shading_warnings(scene: &crate::scene::Scene, warnings: &mut crate::error::Warnings) -> Result<()> {
     crate::shading::texture::Textures::build(scene, warnings)?;
     crate::shading::material::Materials::build(scene, warnings)?;

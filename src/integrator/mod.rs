@@ -2,7 +2,8 @@
 //! each application of `application::registry` rendered by the one generic cache driver ([`cache`]) — with
 //! the settings a render takes beyond the scene file ([`RenderSettings`]) and what it produced
 //! ([`RenderOutput`]). [`render`] is the one by-name dispatch that the command line, the goldens and the
-//! experiments call.
+//! experiments call; [`dry_run`] goes the same way up to the first pixel, for the warnings `cachert info`
+//! lists.
 //!
 //! Depends on `render`, `application`, `placement`, `cache`, `gbuffer`, `shading`, `scene` and `parse`;
 //! only the studies (`golden`, `experiment`) and the command line depend on it.
@@ -14,6 +15,7 @@ use crate::error::{Error, Result, Warnings};
 use crate::image::Image;
 use crate::parse::integrator::{IntegratorParams, report_unused};
 use crate::parse::{Named, ParamList};
+use crate::render::film::apply_scale;
 use crate::render::{INTEGRATORS, RayCounters, per_pixel_integrator, render_image, with_threads};
 use crate::scene::Scene;
 
@@ -69,13 +71,51 @@ fn not_implemented(name: &str) -> Error {
     ))
 }
 
-/// Builds the integrator named by the scene (or by `settings.integrator`) and renders.
+/// How far [`render`]'s one code path goes: the whole render, or everything before the first pixel (reading
+/// parameters, building the integrator and its shading data, a cache application's preparation) for the
+/// warnings and errors that gives ([`dry_run`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pass {
+    /// Render the image.
+    Render,
+    /// Stop before the first pixel (or cache) is shaded.
+    DryRun,
+}
+
+/// Builds the integrator named by the scene (or by `settings.integrator`) and renders. The image has the
+/// Film's `scale` and `maxsampleluminance` applied (`render::film`), whichever integrator made it.
 pub fn render(
     scene: &Scene,
     integrator: Option<&Named>,
     settings: &RenderSettings,
     warnings: &mut Warnings,
 ) -> Result<RenderOutput> {
+    let out = render_pass(scene, integrator, settings, warnings, Pass::Render)?;
+    Ok(out.expect("a render pass returns an image"))
+}
+
+/// Every warning that [`render`] would give for the same scene, `Integrator` directive and settings (the
+/// integrator's own: parameters unused or replaced, scene settings it cannot use, its shading set-up's),
+/// and every error it would give before its first pixel, without rendering: the same code path as
+/// [`render`], stopped before shading ([`Pass::DryRun`]), so the two cannot drift apart. The scene's own
+/// warnings (from loading) are not added here: they come with the loaded scene.
+pub fn dry_run(
+    scene: &Scene,
+    integrator: Option<&Named>,
+    settings: &RenderSettings,
+    warnings: &mut Warnings,
+) -> Result<()> {
+    render_pass(scene, integrator, settings, warnings, Pass::DryRun).map(|_| ())
+}
+
+/// [`render`] or [`dry_run`]: `None` for a dry run.
+fn render_pass(
+    scene: &Scene,
+    integrator: Option<&Named>,
+    settings: &RenderSettings,
+    warnings: &mut Warnings,
+    pass: Pass,
+) -> Result<Option<RenderOutput>> {
     let empty = ParamList::default();
     let scene_name = integrator.map_or("path", |n| n.name.as_str());
     let name = settings.integrator.as_deref().unwrap_or(scene_name);
@@ -101,7 +141,7 @@ pub fn render(
             ),
         );
     }
-    let cache = cache::CacheRender { scene, integrator, settings, warnings: &mut *warnings };
+    let cache = cache::CacheRender { scene, integrator, settings, warnings: &mut *warnings, pass };
     if let Some(out) = registry::dispatch(name, cache) {
         return out;
     }
@@ -116,21 +156,30 @@ pub fn render(
         .ok_or_else(|| not_implemented(name))?;
     iparams.check_overrides()?;
     report_unused(integrator, name, &settings.set, warnings);
+    if pass == Pass::DryRun {
+        return Ok(None);
+    }
     let run = || render_image(scene, &sampler, pixel.as_ref(), settings.seed, settings.progress);
-    let (image, rays, render_secs) = with_threads(settings.threads, run)?;
-    Ok(RenderOutput { image, rays, render_secs, spp: sampler.spp, integrator: name.to_string(), cache: None })
+    let (mut image, rays, render_secs) = with_threads(settings.threads, run)?;
+    apply_scale(&mut image, &scene.film);
+    let integrator = name.to_string();
+    Ok(Some(RenderOutput { image, rays, render_secs, spp: sampler.spp, integrator, cache: None }))
 }
 
 /// Renders the per-pixel integrator `name` with parameters `set` only (the scene's `Integrator` line is
 /// not read) with the scene's Sampler and PixelFilter — `--spp` and `--quick` apply — for a cache
-/// application's per-pixel term. Runs in the current thread pool; returns the image, rays and wall time.
+/// application's per-pixel term. Runs in the current thread pool; returns the image, rays and wall time
+/// (`None` for a dry run, which only builds the integrator, for its warnings and errors).
+/// Its samples are clamped to the Film's `maxsampleluminance`; the image is not scaled by the Film's
+/// `scale`, which the cache driver applies once to the sum.
 pub(crate) fn render_per_pixel_term(
     scene: &Scene,
     name: &str,
     set: &[(String, String)],
     settings: &RenderSettings,
     warnings: &mut Warnings,
-) -> Result<(Image, RayCounters, f64)> {
+    pass: Pass,
+) -> Result<Option<(Image, RayCounters, f64)>> {
     let mut sampler = scene.sampler.clone();
     if let Some(spp) = settings.spp.filter(|&n| n > 0) {
         sampler.spp = spp;
@@ -139,5 +188,8 @@ pub(crate) fn render_per_pixel_term(
     let iparams = IntegratorParams::new(name, &empty, set);
     let pixel = per_pixel_integrator(name, &iparams, scene, &sampler, settings.quick, warnings)?
         .ok_or_else(|| not_implemented(name))?;
-    Ok(render_image(scene, &sampler, pixel.as_ref(), settings.seed, settings.progress))
+    if pass == Pass::DryRun {
+        return Ok(None);
+    }
+    Ok(Some(render_image(scene, &sampler, pixel.as_ref(), settings.seed, settings.progress)))
 }

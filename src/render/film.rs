@@ -1,10 +1,41 @@
 //! STAGE 6 (render): film accumulation with pbrt-v3's weighted reconstruction — each sample adds
 //! filter-weighted radiance to every pixel within the filter radius; a pixel is Σ w·L / Σ w. Tiles
 //! accumulate privately and are merged in tile order, so the sums never depend on thread scheduling.
+//!
+//! Also the two Film settings every integrator honours, per-pixel and cache-based alike, each in one
+//! function: the per-sample clamp `"float maxsampleluminance"` ([`clamp_sample_luminance`], pbrt-v3's
+//! `Film::AddSample`) and the image scale `"float scale"` ([`apply_scale`], pbrt-v3's `Film::WriteImage`).
 
 use crate::image::Image;
-use crate::scene::film::PixelBounds;
+use crate::scene::film::{FilmSpec, PixelBounds};
 use crate::scene::filter::FilterSpec;
+
+/// A sample's radiance `l` clamped as pbrt-v3's `Film::AddSample` does: when its luminance y(l) exceeds
+/// `max_luminance`, `l` is scaled by `max_luminance / y(l)` (so its luminance becomes the limit and its
+/// colour is kept); otherwise, and for an infinite limit (the default: off), `l` is returned unchanged.
+/// y uses pbrt-v3's weights (`RGBToXYZ`'s middle row: 0.212671, 0.715160, 0.072169). Every integrator's
+/// samples go through here: the per-pixel pixel loop's and the cache driver's sub-pixel samples.
+#[inline]
+pub fn clamp_sample_luminance(l: [f32; 3], max_luminance: f32) -> [f32; 3] {
+    let y = 0.212671 * l[0] + 0.715160 * l[1] + 0.072169 * l[2];
+    if y > max_luminance {
+        let s = max_luminance / y;
+        return l.map(|v| v * s);
+    }
+    l
+}
+
+/// Multiplies every pixel of a finished image by the Film's `"float scale"`, once, in f32, as pbrt-v3's
+/// `Film::WriteImage` does. Every integrator's image passes through here exactly once: the per-pixel
+/// integrators' in `integrator::render`, the cache-based ones' (the sum of the cached image and any
+/// per-pixel term, so irradiance caching's `output full` is scaled once) in `integrator::cache::render_with`.
+/// A scale of 1 leaves the image untouched.
+pub fn apply_scale(image: &mut Image, film: &FilmSpec) {
+    let scale = film.scale;
+    if scale != 1.0 {
+        image.pixels.iter_mut().for_each(|p| *p = p.map(|v| v * scale));
+    }
+}
 
 /// Weighted sums for a rectangle of pixels.
 #[derive(Clone, Debug)]
@@ -81,13 +112,14 @@ impl Film {
         }
     }
 
-    /// The final image: Σ w·L / Σ w per pixel (0 where no sample landed), times `scale`.
-    pub fn to_image(&self, scale: f32) -> Image {
+    /// The reconstructed image: Σ w·L / Σ w per pixel (0 where no sample landed), before the Film's
+    /// scale ([`apply_scale`]).
+    pub fn to_image(&self) -> Image {
         let [w, h] = self.bounds.size();
         let mut img = Image::new(w, h);
         for (i, s) in self.sums.iter().enumerate() {
             if s[3] != 0.0 {
-                let inv = scale as f64 / s[3];
+                let inv = 1.0 / s[3];
                 img.set(i % w, i / w, [(s[0] * inv) as f32, (s[1] * inv) as f32, (s[2] * inv) as f32]);
             }
         }
@@ -116,9 +148,20 @@ mod tests {
             }
             film.merge(&tile);
         }
-        let img = film.to_image(1.0);
+        let img = film.to_image();
         assert_eq!(img.get(3, 1), [4.0, 1.0, 1.0]);
         assert_eq!(img.get(0, 0), [1.0, 0.0, 1.0]);
+    }
+
+    #[test]
+    fn the_clamp_keeps_colour_and_sets_luminance_to_the_limit() {
+        let l = [10.0, 20.0, 40.0];
+        assert_eq!(clamp_sample_luminance(l, f32::INFINITY), l);
+        assert_eq!(clamp_sample_luminance(l, 100.0), l);
+        let c = clamp_sample_luminance(l, 2.0);
+        let y = 0.212671 * c[0] + 0.715160 * c[1] + 0.072169 * c[2];
+        assert!((y - 2.0).abs() < 1e-6, "{y}");
+        assert!((c[2] / c[0] - 4.0).abs() < 1e-6, "{c:?}");
     }
 
     #[test]
@@ -129,7 +172,7 @@ mod tests {
         tile.add([1.5, 1.5], [1.0, 1.0, 1.0], &f);
         let mut film = Film::new(image);
         film.merge(&tile);
-        let img = film.to_image(1.0);
+        let img = film.to_image();
         assert_eq!(img.get(0, 0), [1.0; 3]);
         assert_eq!(img.get(2, 1), [1.0; 3]);
     }

@@ -11,15 +11,16 @@ use crate::scene::Scene;
 use crate::scene::film::PixelBounds;
 use crate::scene::sampler::SamplerSpec;
 
-use super::film::{Film, FilmTile};
+use super::film::{Film, FilmTile, clamp_sample_luminance};
 use super::{PixelIntegrator, RayCounters};
 use crate::sampling::pixel_samples::PixelSamples;
 use crate::shading::lighting::Scratch;
 
 const TILE: i32 = 16;
 
-/// Renders `scene` with `integrator`, `sampler.spp` samples per pixel; returns the image, the rays traced
-/// and the wall time. Identical output for any thread count.
+/// Renders `scene` with `integrator`, `sampler.spp` samples per pixel, each clamped to the Film's
+/// `maxsampleluminance`; returns the image (before the Film's `scale`, which the caller applies once with
+/// `film::apply_scale`), the rays traced and the wall time. Identical output for any thread count.
 pub fn render_image(
     scene: &Scene,
     sampler: &SamplerSpec,
@@ -47,7 +48,7 @@ pub fn render_image(
         film.merge(tile);
         rays.add(c);
     }
-    (film.to_image(scene.film.scale), rays, start.elapsed().as_secs_f64())
+    (film.to_image(), rays, start.elapsed().as_secs_f64())
 }
 
 fn tiles(b: &PixelBounds) -> Vec<PixelBounds> {
@@ -88,12 +89,7 @@ fn render_tile(
                 if !l.iter().all(|v| v.is_finite()) {
                     l = [0.0; 3];
                 }
-                let y_lum = 0.212671 * l[0] + 0.715160 * l[1] + 0.072169 * l[2];
-                if y_lum > max_lum {
-                    let s = max_lum / y_lum;
-                    l = l.map(|v| v * s);
-                }
-                tile.add(p_film, l, &scene.filter);
+                tile.add(p_film, clamp_sample_luminance(l, max_lum), &scene.filter);
             }
         }
     }

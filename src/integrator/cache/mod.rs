@@ -15,25 +15,44 @@ pub mod stats;
 pub use run::{CachedOutput, render_cached};
 pub use settings::{CacheOverrides, CacheSettings, PARAMETERS, Placement};
 
-use crate::application::Application;
 use crate::application::registry::{APPLICATIONS, WithApplication};
+use crate::application::{Application, PerPixelTerm};
 use crate::error::{Result, Warnings};
+use crate::image::Image;
 use crate::parse::{Named, ParamList};
+use crate::scene::ray::RayCounters;
 use crate::scene::{Scene, filter};
 
-use super::{RenderOutput, RenderSettings, render_per_pixel_term};
+use super::{Pass, RenderOutput, RenderSettings, render_per_pixel_term};
 use crate::parse::integrator::report_unused;
 use crate::parse::integrator::{IntegratorParams, help_text};
+use crate::render::film::apply_scale;
 use crate::render::with_threads;
 
 /// Renders `scene` with cache application `A`: the scene's `Integrator` parameters (when it names `A`)
-/// and `settings.set` give both the generic and `A`'s parameters; `settings.cache` wins over them.
+/// and `settings.set` give both the generic and `A`'s parameters; `settings.cache` wins over them. Every
+/// sample is clamped to the Film's `maxsampleluminance` and the finished image (with `A`'s per-pixel term,
+/// if it adds one) is multiplied by the Film's `scale` once, as for the per-pixel integrators.
 pub fn render_with<A: Application>(
     scene: &Scene,
     integrator: Option<&Named>,
     settings: &RenderSettings,
     warnings: &mut Warnings,
 ) -> Result<RenderOutput> {
+    let out = render_pass::<A>(scene, integrator, settings, warnings, Pass::Render)?;
+    Ok(out.expect("a render pass returns an image"))
+}
+
+/// [`render_with`], or for [`Pass::DryRun`] the same steps up to shading — parameters, the settings a
+/// cache render cannot use, `A`'s preparation and its per-pixel term's integrator — for their warnings
+/// and errors, returning `None`.
+fn render_pass<A: Application>(
+    scene: &Scene,
+    integrator: Option<&Named>,
+    settings: &RenderSettings,
+    warnings: &mut Warnings,
+    pass: Pass,
+) -> Result<Option<RenderOutput>> {
     let empty = ParamList::default();
     let params = match integrator {
         Some(n) if n.name == A::NAME => &n.params,
@@ -55,49 +74,72 @@ pub fn render_with<A: Application>(
     p.check_overrides()?;
     report_unused(integrator, A::NAME, &settings.set, warnings);
     let mut run_warnings = Warnings::default();
-    let run = || -> Result<CachedOutput> {
+    let run = || -> Result<Option<CachedOutput>> {
         let start = std::time::Instant::now();
         let cx = app.prepare(scene, &mut run_warnings)?;
         let prepare_secs = start.elapsed().as_secs_f64();
-        let mut out = render_cached(scene, &app, &cx, &cs)?;
-        out.stats.times.prepare = prepare_secs;
-        out.stats.times.total += prepare_secs;
-        out.stats.prepared = app.prepared_report(&cx).into_iter().map(|(k, v)| (k.to_string(), v)).collect();
-        if let Some(why) = &without_caches {
-            out.stats.notes.push(format!("{why}: every sample is shaded without caches (placement none)"));
+        let mut out = match pass {
+            Pass::Render => Some(render_cached(scene, &app, &cx, &cs)?),
+            Pass::DryRun => None,
+        };
+        if let Some(out) = &mut out {
+            out.stats.times.prepare = prepare_secs;
+            out.stats.times.total += prepare_secs;
+            out.stats.prepared = app.prepared_report(&cx).into_iter().map(|(k, v)| (k.to_string(), v)).collect();
+            if let Some(why) = &without_caches {
+                out.stats.notes.push(format!("{why}: every sample is shaded without caches (placement none)"));
+            }
         }
+        // Both parts clamp their own samples to the Film's maxsampleluminance (the per-pixel term in its
+        // pixel loop, the cached part in `shade_image`). pbrt-v3 would clamp each sample's sum of the two;
+        // this differs from it only for samples where the sum is over the limit while both parts add light
+        // (in practice where both are bright at once): a part under the limit passes whole. The two parts
+        // do not share samples (the term has the Sampler's, the cached part its sub-pixel positions), so the
+        // sum's clamp cannot be reproduced.
         if let Some(term) = &term {
             let w = &mut run_warnings;
-            let (image, rays, secs) = render_per_pixel_term(scene, term.integrator, &term.set, settings, w)?;
-            out.image.add(&image);
-            out.stats.render_rays.add(&rays);
-            out.stats.times.per_pixel_term = secs;
-            out.stats.times.total += secs;
-            out.stats.notes.push(format!(
-                "the image adds {} ({}) rendered with the scene's Sampler and PixelFilter",
-                term.integrator,
-                term.set.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", ")
-            ));
+            let rendered = render_per_pixel_term(scene, term.integrator, &term.set, settings, w, pass)?;
+            if let (Some(out), Some(rendered)) = (&mut out, rendered) {
+                add_term(out, term, rendered);
+            }
+        }
+        if let Some(out) = &mut out {
+            // The Film's scale, once, on the whole image (the per-pixel term is unscaled until here).
+            apply_scale(&mut out.image, &scene.film);
         }
         Ok(out)
     };
     let out = with_threads(settings.threads, run);
     // Kept whether or not the render succeeded (a failing scene's warnings still say what was read).
     warnings.extend(run_warnings);
-    let out = out??;
+    let Some(out) = out?? else { return Ok(None) };
     let mut rays = out.stats.cache_rays;
     rays.add(&out.stats.render_rays);
-    Ok(RenderOutput {
+    Ok(Some(RenderOutput {
         image: out.image.clone(),
         rays,
         render_secs: out.stats.times.total,
         spp: cs.subpixels,
         integrator: format!("{}, placement {}", A::NAME, cs.placement),
         cache: Some(Box::new(out)),
-    })
+    }))
 }
 
-/// [`render_with`] as a registry visitor: `integrator::render` dispatches an integrator name through it.
+/// Adds the per-pixel term's image, rays and time to the cached render, with a note naming it.
+fn add_term(out: &mut CachedOutput, term: &PerPixelTerm, (image, rays, secs): (Image, RayCounters, f64)) {
+    out.image.add(&image);
+    out.stats.render_rays.add(&rays);
+    out.stats.times.per_pixel_term = secs;
+    out.stats.times.total += secs;
+    out.stats.notes.push(format!(
+        "the image adds {} ({}) rendered with the scene's Sampler and PixelFilter",
+        term.integrator,
+        term.set.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", ")
+    ));
+}
+
+/// [`render_with`] (or its dry run) as a registry visitor: `integrator::render` and `integrator::dry_run`
+/// dispatch an integrator name through it.
 pub struct CacheRender<'a, 'w> {
     /// The scene.
     pub scene: &'a Scene,
@@ -107,12 +149,14 @@ pub struct CacheRender<'a, 'w> {
     pub settings: &'a RenderSettings,
     /// Where warnings go.
     pub warnings: &'w mut Warnings,
+    /// Render, or stop before shading.
+    pub pass: Pass,
 }
 
 impl WithApplication for CacheRender<'_, '_> {
-    type Output = Result<RenderOutput>;
-    fn apply<A: Application>(self) -> Result<RenderOutput> {
-        render_with::<A>(self.scene, self.integrator, self.settings, self.warnings)
+    type Output = Result<Option<RenderOutput>>;
+    fn apply<A: Application>(self) -> Result<Option<RenderOutput>> {
+        render_pass::<A>(self.scene, self.integrator, self.settings, self.warnings, self.pass)
     }
 }
 
@@ -132,9 +176,9 @@ pub fn help() -> String {
 
 /// The sample settings a cache-based render honours and the ones it cannot, said aloud: `--spp` (and
 /// `--quick`'s one sample per pixel) become the sub-pixel sample count unless `subpixels` is set; the scene's
-/// Sampler and PixelFilter, and the Film's `scale` and `maxsampleluminance`, are not used (the driver shades
-/// `subpixels` jittered positions per pixel and averages them), each with a warning where it was written.
-/// Returns `settings.cache` with the honoured sub-pixel count added.
+/// Sampler and PixelFilter are not used (the driver shades `subpixels` jittered positions per pixel and
+/// averages them), each with a warning where it was written. (The Film's `scale` and `maxsampleluminance`
+/// are honoured: [`render_with`].) Returns `settings.cache` with the honoured sub-pixel count added.
 fn cache_sample_settings(
     scene: &Scene,
     params: &ParamList,
@@ -153,8 +197,8 @@ fn cache_sample_settings(
         None => {}
     }
     let per_pixel = "it shades \"subpixels\" jittered positions per pixel (set it, or --spp)";
-    // A per-pixel term renders with the scene's Sampler, PixelFilter and Film settings: only the cached
-    // part leaves them out.
+    // A per-pixel term renders with the scene's Sampler and PixelFilter: only the cached part leaves them
+    // out.
     if !per_pixel_term {
         if let Some(loc) = &scene.declared.sampler {
             let name = &scene.sampler.name;
@@ -167,14 +211,6 @@ fn cache_sample_settings(
                 "PixelFilter is not used by cache-based integrators: the sub-pixel samples of a pixel are averaged (a box filter of radius 0.5)",
             );
         }
-    }
-    let which = if per_pixel_term { "to the cached light" } else { "by cache-based integrators" };
-    if scene.film.scale != 1.0 {
-        warnings.general(format!("Film \"scale\" {} is not applied {which}", scene.film.scale));
-    }
-    if scene.film.max_sample_luminance.is_finite() {
-        warnings
-            .general(format!("Film \"maxsampleluminance\" {} is not applied {which}", scene.film.max_sample_luminance));
     }
     o
 }

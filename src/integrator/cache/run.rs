@@ -19,6 +19,7 @@ use crate::error::{Error, Result};
 use crate::gbuffer::{GBuffer, PixelId};
 use crate::image::Image;
 use crate::placement::{CacheId, CacheOracle, registry};
+use crate::render::film::clamp_sample_luminance;
 use crate::sampling::rng::{hash3, mix64};
 use crate::sampling::sequence::sobol02;
 use crate::sampling::{Rng, Stratum};
@@ -313,8 +314,10 @@ fn weighted(v: [f32; 3], w: Spectrum) -> [f32; 3] {
 
 /// Shades every sub-pixel sample (box filter over the pixel): each vertex its camera path hands over
 /// ([`CameraPaths`]) from the caches, or by the reference; a vertex after a specular bounce that no cache
-/// serves ([`Caches::serves`]) by the application's per-sample estimator. Returns the image, the rays and
-/// what the paths did.
+/// serves ([`Caches::serves`]) by the application's per-sample estimator. Each value is clamped to the
+/// Film's `maxsampleluminance` as it is added, as pbrt-v3's `Film::AddSample` clamps a sample — per vertex
+/// and for the light the path gathered itself, which differs from clamping their sum only where a sample
+/// has several and their sum is over the limit. Returns the image, the rays and what the paths did.
 fn shade_image<A: Application>(
     scene: &Scene,
     app: &A,
@@ -352,7 +355,7 @@ fn shade_image<A: Application>(
                         let ray = scene.camera.generate_ray([x as f32 + u[0], y as f32 + u[1]], [0.5, 0.5]);
                         let gathered = paths.trace(ray, eye, &mut vertices, &mut counts, &mut rays);
                         if gathered != Spectrum::ZERO {
-                            let g = gathered.to_array();
+                            let g = clamp_sample_luminance(gathered.to_array(), scene.film.max_sample_luminance);
                             (0..3).for_each(|c| px[c] += g[c]);
                         }
                         let stratum = Stratum::new(s.seed, key(x, 0), i, n);
@@ -363,7 +366,10 @@ fn shade_image<A: Application>(
                         }
                     }
                 }
-                let mut add = |col: usize, v: [f32; 3]| (0..3).for_each(|k| out[col][k] += v[k]);
+                let mut add = |col: usize, v: [f32; 3]| {
+                    let v = clamp_sample_luminance(v, scene.film.max_sample_luminance);
+                    (0..3).for_each(|k| out[col][k] += v[k])
+                };
                 if reference {
                     for p in &points {
                         let mut rng = Rng::keyed(s.seed, STAGE_SHADE, p.key);
