@@ -13,10 +13,13 @@ pub mod stats;
 
 pub use run::{CachedOutput, render_cached};
 pub use settings::{CacheOverrides, CacheSettings, PARAMETERS, Placement};
+pub use stats::ScaleReport;
 
 use crate::application::Application;
 use crate::application::registry::{APPLICATIONS, WithApplication};
 use crate::error::{Result, Warnings};
+use crate::gbuffer::scale::{SceneScale, VIEW_FACTOR};
+use crate::parse::integrator::json_f32;
 use crate::parse::{Named, ParamList};
 use crate::scene::{Scene, filter};
 
@@ -39,11 +42,14 @@ pub fn render_with<A: Application>(
         _ => &empty,
     };
     let p = IntegratorParams::new(A::NAME, params, &settings.set);
-    let app = A::from_params(&p, scene)?;
+    // The one length scale L of this render: the application's defaults, λ and placement all read it.
+    let scale = SceneScale::of(scene);
+    let app = A::from_params(&p, &scale)?;
     let plan = app.plan();
     let term = plan.added_per_pixel;
     let overrides = cache_sample_settings(scene, params, settings, term.is_some(), warnings);
-    let mut cs = CacheSettings::from_params(&p, &overrides, scene, A::PAPER_CACHES, settings.seed, settings.progress)?;
+    let mut cs =
+        CacheSettings::from_params(&p, &overrides, scene, scale, A::PAPER_CACHES, settings.seed, settings.progress)?;
     if !plan.dgs_geometry {
         cs.params.dgs.geometry = false;
     }
@@ -62,6 +68,7 @@ pub fn render_with<A: Application>(
         out.stats.times.prepare = prepare_secs;
         out.stats.times.total += prepare_secs;
         out.stats.prepared = app.prepared_report(&cx).into_iter().map(|(k, v)| (k.to_string(), v)).collect();
+        out.stats.scale = Some(scale_report(&cs, &app));
         if let Some(why) = &without_caches {
             out.stats.notes.push(format!("{why}: every sample is shaded without caches (placement none)"));
         }
@@ -96,6 +103,13 @@ pub fn render_with<A: Application>(
     })
 }
 
+/// The length scale L of a render and the defaults derived from it: λ unless set, and the application's.
+fn scale_report<A: Application>(cs: &CacheSettings, app: &A) -> ScaleReport {
+    let lambda = cs.params.lambda.is_none().then(|| ("lambda", cs.params.lambda_for(cs.scale.length)));
+    let derived = lambda.into_iter().chain(app.scale_derived()).map(|(k, v)| (k.to_string(), json_f32(v))).collect();
+    ScaleReport { scale: cs.scale, derived }
+}
+
 /// [`render_with`] as a registry visitor: `integrator::render` dispatches an integrator name through it.
 pub struct CacheRender<'a, 'w> {
     /// The scene.
@@ -125,7 +139,10 @@ pub fn help() -> String {
         out.push('\n');
         out.push_str(&help_text(&format!("{} ({}), its own parameters:", e.name, e.about), e.parameters));
     }
-    out.push_str("(L is the diagonal of the scene's bounding box.)\n");
+    out.push_str(&format!(
+        "(L is the scene's length scale: the diagonal of its bounding box, or {VIEW_FACTOR} times the extent of what \
+         the camera sees where that is smaller; README.md, \"Scene scale\".)\n"
+    ));
     out
 }
 
