@@ -141,7 +141,7 @@ impl CacheIndex {
     /// `lookup` and the Eq. 5 weight `lambda` (0.5/L in the paper).
     ///
     /// The exact-hit radius is `EXACT_HIT` times the diagonal of the caches' bounding box; the driver can set
-    /// it from the scene diagonal L with [`CacheIndex::with_scene_diagonal`].
+    /// it from the scene's length scale L with [`CacheIndex::with_scale`].
     pub fn new(points: &[(Vec3A, Vec3A)], lookup: LookupParams, lambda: f32) -> Self {
         let mut ids = Vec::with_capacity(points.len());
         let mut coords = Vec::with_capacity(points.len());
@@ -169,8 +169,8 @@ impl CacheIndex {
         CacheIndex { tree, ids, points: stored, lookup, lambda, cos_max, exact_radius: EXACT_HIT * diagonal, skipped }
     }
 
-    /// Sets the exact-hit radius from the scene diagonal L (`EXACT_HIT · L`, ALGORITHMS.md §5 step 6).
-    pub fn with_scene_diagonal(mut self, l: f32) -> Self {
+    /// Sets the exact-hit radius from the scene's length scale L (`EXACT_HIT · L`, ALGORITHMS.md §5 step 6).
+    pub fn with_scale(mut self, l: f32) -> Self {
         if l.is_finite() && l > 0.0 {
             self.exact_radius = EXACT_HIT * l;
         }
@@ -633,7 +633,7 @@ mod tests {
     #[test]
     fn weights_are_inverse_distances_and_an_exact_hit_stands_alone() {
         let caches = vec![(Vec3A::ZERO, Vec3A::Z), (Vec3A::X, Vec3A::Z), (Vec3A::new(3.0, 0.0, 0.0), Vec3A::Z)];
-        let index = CacheIndex::new(&caches, LookupParams::default(), 0.5).with_scene_diagonal(10.0);
+        let index = CacheIndex::new(&caches, LookupParams::default(), 0.5).with_scale(10.0);
         let mut near = Vec::new();
         let mut w = Vec::new();
         index.select(Vec3A::new(0.5, 0.0, 0.0), Vec3A::Z, &mut near);

@@ -4,6 +4,8 @@
 //! Depends on `scene` (camera rays, intersections); placement code reads only these plain types, so tests
 //! can build synthetic G-buffers with [`GBuffer::from_fn`].
 
+pub mod scale;
+
 use glam::Vec3A;
 use rayon::prelude::*;
 
@@ -120,25 +122,22 @@ pub struct GBuffer {
     pub valid_count: usize,
     /// Smallest and largest depth over valid pixels ((0, 0) when none is valid).
     pub depth_range: (f32, f32),
-    /// Diagonal of the scene's bounding box (ALGORITHMS.md's L).
-    pub scene_diagonal: f32,
+    /// The scene's length scale L ([`scale::SceneScale::length`]; ALGORITHMS.md's L), which the placement
+    /// strategies' scale-dependent defaults are multiples of.
+    pub scale: f32,
 }
 
 impl GBuffer {
     /// Builds a G-buffer from a function of (x, y) — for tests and synthetic inputs.
-    pub fn from_fn(
-        width: usize,
-        height: usize,
-        scene_diagonal: f32,
-        f: impl Fn(usize, usize) -> Option<ShadingPoint>,
-    ) -> Self {
+    pub fn from_fn(width: usize, height: usize, scale: f32, f: impl Fn(usize, usize) -> Option<ShadingPoint>) -> Self {
         let points = (0..width * height).map(|i| f(i % width, i / width)).collect();
-        Self::finish(width, height, points, scene_diagonal)
+        Self::finish(width, height, points, scale)
     }
 
     /// Traces one primary ray through every pixel centre of `scene`'s cropped film (passing through
-    /// surfaces without a material, as the integrators do).
-    pub fn from_scene(scene: &Scene) -> Self {
+    /// surfaces without a material, as the integrators do); `scale` is the scene's length scale L
+    /// ([`scale::SceneScale::of`]).
+    pub fn from_scene(scene: &Scene, scale: f32) -> Self {
         let b = scene.film.cropped_bounds();
         let [w, h] = b.size();
         let points = (0..w * h)
@@ -148,15 +147,15 @@ impl GBuffer {
                 shading_point(scene, p_film)
             })
             .collect();
-        Self::finish(w, h, points, scene.diagonal())
+        Self::finish(w, h, points, scale)
     }
 
-    fn finish(width: usize, height: usize, points: Vec<Option<ShadingPoint>>, scene_diagonal: f32) -> Self {
+    fn finish(width: usize, height: usize, points: Vec<Option<ShadingPoint>>, scale: f32) -> Self {
         let valid_count = points.iter().filter(|p| p.is_some()).count();
         let depth_range = points.iter().flatten().fold(None, |r: Option<(f32, f32)>, p| {
             Some(r.map_or((p.depth, p.depth), |(lo, hi)| (lo.min(p.depth), hi.max(p.depth))))
         });
-        GBuffer { width, height, points, valid_count, depth_range: depth_range.unwrap_or((0.0, 0.0)), scene_diagonal }
+        GBuffer { width, height, points, valid_count, depth_range: depth_range.unwrap_or((0.0, 0.0)), scale }
     }
 
     /// The pixel id of (x, y).

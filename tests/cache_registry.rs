@@ -12,6 +12,7 @@ use cachert::Warnings;
 use cachert::application::registry::APPLICATIONS;
 use cachert::application::{Application, Neighbour};
 use cachert::gbuffer::ShadingPoint;
+use cachert::gbuffer::scale::SceneScale;
 use cachert::integrator::cache::{self, CacheOverrides, Placement, render_with};
 use cachert::integrator::{RenderOutput, RenderSettings};
 use cachert::parse::integrator::{IntegratorParams, ParamDef, Parameter, markdown_table};
@@ -42,7 +43,7 @@ impl Application for NormalZ {
     type Record = ZRecord;
     type Prepared<'s> = ();
 
-    fn from_params(p: &IntegratorParams<'_>, _: &Scene) -> cachert::Result<Self> {
+    fn from_params(p: &IntegratorParams<'_>, _: &SceneScale) -> cachert::Result<Self> {
         Ok(NormalZ { scale: p.get(&SCALE)? as f32 })
     }
 

@@ -18,6 +18,7 @@ use glam::Vec3A;
 
 use crate::error::{Result, Warnings};
 use crate::gbuffer::ShadingPoint;
+use crate::gbuffer::scale::SceneScale;
 use crate::parse::integrator::{IntegratorParams, ParamDef, Parameter, Valid, json_f32};
 use crate::sampling::warp::equal_area_hemisphere;
 use crate::sampling::{Frame, Rng, Stratum};
@@ -43,11 +44,15 @@ pub struct CacheAo {
     cos_sum: f32,
     /// Occlusion ray length.
     pub max_distance: f32,
+    /// Whether `max_distance` is the default, [`MAX_DISTANCE_OF_L`] · L.
+    max_distance_derived: bool,
 }
 
 /// `gather`: the side n of the gathering grid.
 pub const GATHER: ParamDef<i64> =
     ParamDef::int("gather", 32, "gathering grid side: gather² rays per cache").between(1, 256);
+/// The default `maxdistance` as a fraction of the scene's length scale L.
+pub const MAX_DISTANCE_OF_L: f32 = 0.1;
 /// `maxdistance`: the occlusion ray length (default 0.1 · L, unbounded in a scene of no size).
 pub const MAX_DISTANCE: ParamDef<f64> =
     ParamDef::computed("maxdistance", "0.1 · L", "occlusion ray length").valid(Valid::Positive { finite: true });
@@ -61,7 +66,7 @@ impl CacheAo {
             .map(|k| equal_area_hemisphere([((k % n) as f32 + 0.5) / n as f32, ((k / n) as f32 + 0.5) / n as f32]))
             .collect();
         let cos_sum = dirs.iter().map(|d| d.z).sum();
-        CacheAo { dirs, cos_sum, max_distance }
+        CacheAo { dirs, cos_sum, max_distance, max_distance_derived: false }
     }
 
     /// pbrt-v3's `ambientocclusion` with the same ray length and cosine sampling, divided by π.
@@ -120,15 +125,19 @@ impl Application for CacheAo {
     type Record = VisibilityRecord;
     type Prepared<'s> = &'s Scene;
 
-    fn from_params(p: &IntegratorParams<'_>, scene: &Scene) -> Result<Self> {
+    fn from_params(p: &IntegratorParams<'_>, scale: &SceneScale) -> Result<Self> {
         let gather = p.get(&GATHER)?;
-        let l = scene.diagonal();
-        let max_distance = match p.get_opt(&MAX_DISTANCE)? {
-            Some(v) => v as f32,
-            None if l > 0.0 => 0.1 * l,
-            None => f32::INFINITY,
+        let l = scale.length;
+        let (max_distance, derived) = match p.get_opt(&MAX_DISTANCE)? {
+            Some(v) => (v as f32, false),
+            None if l > 0.0 => (MAX_DISTANCE_OF_L * l, true),
+            None => (f32::INFINITY, false),
         };
-        Ok(CacheAo::new(gather as usize, max_distance))
+        Ok(CacheAo { max_distance_derived: derived, ..CacheAo::new(gather as usize, max_distance) })
+    }
+
+    fn scale_derived(&self) -> Vec<(&'static str, f32)> {
+        if self.max_distance_derived { vec![("maxdistance", self.max_distance)] } else { Vec::new() }
     }
 
     fn prepare<'s>(&self, scene: &'s Scene, _: &mut Warnings) -> Result<&'s Scene> {

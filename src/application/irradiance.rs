@@ -30,6 +30,7 @@ use glam::Vec3A;
 
 use crate::error::{Error, Result, Warnings};
 use crate::gbuffer::ShadingPoint;
+use crate::gbuffer::scale::SceneScale;
 use crate::parse::integrator::{Choice, IntegratorParams, MAX_DEPTH, ParamDef, Parameter};
 use crate::sampling::warp::equal_area_hemisphere;
 use crate::sampling::{Frame, Rng, Stratum};
@@ -290,7 +291,7 @@ impl Application for IrradianceCache {
     type Record = IrradianceRecord;
     type Prepared<'s> = Lit<'s>;
 
-    fn from_params(p: &IntegratorParams<'_>, _: &Scene) -> Result<Self> {
+    fn from_params(p: &IntegratorParams<'_>, _: &SceneScale) -> Result<Self> {
         let gather = p.get(&GATHER)?;
         let max_depth = p.get(&MAXDEPTH)?;
         let output = p.choice(&OUTPUT)?;

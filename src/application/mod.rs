@@ -17,9 +17,10 @@
 //! - *identity and parameters*: `NAME`, `ABOUT`, `PARAMETERS` (each declared once as a
 //!   `parse::integrator::ParamDef`, read with its typed getters), and `PAPER_CACHES`, which stays on the trait
 //!   because the driver's default budget `caches` scales it;
-//! - *the records*: `from_params`, `prepare`, `compute_record`, `diff`, `finish_record`, `shade`,
+//! - *the records*: `from_params` (which resolves the defaults that scale with the scene from its length
+//!   scale L, `gbuffer::scale::SceneScale`), `prepare`, `compute_record`, `diff`, `finish_record`, `shade`,
 //!   `reference`, `record_bytes`, `record_bytes_bound`, and the `--stats` report (`settings`,
-//!   `prepared_report`);
+//!   `prepared_report`, `scale_derived`);
 //! - [`Application::plan`]: a [`CachePlan`], what these settings ask of the driver beyond caches. It holds the
 //!   three hooks that each served one application, now generic fields named for what the driver does:
 //!   `DGS_GEOMETRY` became `dgs_geometry` (importance caching: off), `without_caches` became
@@ -43,6 +44,7 @@ use glam::Vec3A;
 
 use crate::error::{Result, Warnings};
 use crate::gbuffer::ShadingPoint;
+use crate::gbuffer::scale::SceneScale;
 use crate::parse::integrator::{IntegratorParams, Parameter};
 use crate::sampling::{Rng, Stratum};
 use crate::scene::Scene;
@@ -195,8 +197,16 @@ pub trait Application: Sync + Sized {
     type Prepared<'s>: Sync;
 
     /// Reads exactly the parameters of [`Application::PARAMETERS`] with the typed getters of
-    /// `IntegratorParams` (a bad value is an error naming it).
-    fn from_params(p: &IntegratorParams<'_>, scene: &Scene) -> Result<Self>;
+    /// `IntegratorParams` (a bad value is an error naming it); a default that scales with the scene is a
+    /// multiple of `scale.length`, the scene's length scale L (never of the raw bounding-box diagonal).
+    fn from_params(p: &IntegratorParams<'_>, scale: &SceneScale) -> Result<Self>;
+
+    /// The values these settings derived from the scene's length scale L (cache AO's default
+    /// `maxdistance`, importance caching's d_c), for the `--stats` report; a value the user set is not
+    /// derived (the default: none).
+    fn scale_derived(&self) -> Vec<(&'static str, f32)> {
+        Vec::new()
+    }
 
     /// Prepares what the application reads from `scene` while rendering; problems that do not stop it (a
     /// scene without lights) are warnings.

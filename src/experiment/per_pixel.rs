@@ -14,6 +14,7 @@ use std::path::Path;
 use crate::application::registry::{self, WithApplication};
 use crate::application::{Application, Baseline};
 use crate::error::{Error, Result, Warnings};
+use crate::gbuffer::scale::SceneScale;
 use crate::image::Image;
 use crate::integrator::{RenderSettings, render};
 use crate::parse::integrator::IntegratorParams;
@@ -43,7 +44,8 @@ impl WithApplication for BaselineOf<'_> {
     fn apply<A: Application>(self) -> Self::Output {
         let empty = ParamList::default();
         let params = self.integrator.filter(|n| n.name == A::NAME).map_or(&empty, |n| &n.params);
-        let app = A::from_params(&IntegratorParams::new(A::NAME, params, self.set), self.scene)?;
+        let scale = SceneScale::of(self.scene);
+        let app = A::from_params(&IntegratorParams::new(A::NAME, params, self.set), &scale)?;
         Ok((A::STUDY.baselines)(&app))
     }
 }

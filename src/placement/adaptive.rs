@@ -136,7 +136,7 @@ fn errors(g: &GBuffer, oracle: &dyn CacheOracle, cands: &[CacheId], lookup: Look
         .collect();
     // CHOICE: select M + 1 and drop c itself, so Nb(c) has M caches other than c.
     let lp = LookupParams { keep: lookup.keep + 1, ..lookup };
-    let index = CacheIndex::new(&caches, lp, lambda).with_scene_diagonal(g.scene_diagonal);
+    let index = CacheIndex::new(&caches, lp, lambda).with_scale(g.scale);
     let nbs: Vec<Vec<CacheId>> = cands
         .par_iter()
         .map_init(Vec::<Neighbour>::new, |near, &c| {
@@ -174,7 +174,7 @@ impl AdaptivePlacement for AdaptiveSampling {
             return Ok(AdaptiveInfo::default());
         }
         let mut st = State::new(g, stage1, oracle)?;
-        let l = g.scene_diagonal;
+        let l = g.scale;
         let lambda = params.lambda_for(if l.is_finite() && l > 0.0 { l } else { 1.0 });
         let mut info = AdaptiveInfo::default();
         let mut cands: Vec<CacheId> = (0..oracle.len() as CacheId).collect();

@@ -264,9 +264,9 @@ pub(crate) fn discontinuity_map(
     let mut d = vec![0f32; g.width * g.height];
     if terms.diff && oracle.len() >= 2 {
         let caches = cache_points(g, oracle);
-        let l = g.scene_diagonal;
+        let l = g.scale;
         let lambda = params.lambda_for(if l.is_finite() && l > 0.0 { l } else { 1.0 });
-        let index = CacheIndex::new(&caches, params.lookup, lambda).with_scene_diagonal(l);
+        let index = CacheIndex::new(&caches, params.lookup, lambda).with_scale(l);
         let (mut avg, mut max) = diff_terms(g, &index, oracle);
         normalise(&mut avg, &mask);
         normalise(&mut max, &mask);

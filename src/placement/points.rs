@@ -66,11 +66,11 @@ pub(crate) fn collect(g: &GBuffer, meters_per_unit: f32) -> Vec<Pt> {
         .collect()
 }
 
-/// A usable length scale for a G-buffer: its scene diagonal L, or the points' bounding-box diagonal when L
+/// A usable length scale for a G-buffer: its scene scale L, or the points' bounding-box diagonal when L
 /// is missing, or 1.
 pub(crate) fn length_scale(g: &GBuffer, pts: &[Pt]) -> f32 {
-    if g.scene_diagonal.is_finite() && g.scene_diagonal > 0.0 {
-        return g.scene_diagonal;
+    if g.scale.is_finite() && g.scale > 0.0 {
+        return g.scale;
     }
     let (lo, hi) = pts
         .iter()

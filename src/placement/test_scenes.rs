@@ -59,13 +59,13 @@ pub fn noise_normals(w: usize, h: usize) -> GBuffer {
 pub fn coincident(w: usize, h: usize) -> GBuffer {
     let base = plane(w, h);
     let dup = base.points.iter().flatten().next().copied();
-    GBuffer::from_fn(w, h, base.scene_diagonal, |x, y| if x < w / 2 { dup } else { base.points[y * w + x] })
+    GBuffer::from_fn(w, h, base.scale, |x, y| if x < w / 2 { dup } else { base.points[y * w + x] })
 }
 
 /// The sphere scene with NaN normals on every third pixel.
 pub fn nan_normals(w: usize, h: usize) -> GBuffer {
     let base = sphere_on_plane(w, h);
-    GBuffer::from_fn(w, h, base.scene_diagonal, |x, y| {
+    GBuffer::from_fn(w, h, base.scale, |x, y| {
         let mut sp = base.points[y * w + x]?;
         if (x + y) % 3 == 0 {
             sp.n = Vec3A::new(f32::NAN, 0.0, 1.0);

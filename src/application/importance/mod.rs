@@ -43,6 +43,7 @@ pub mod vpl;
 
 use crate::error::{Error, Result, Warnings};
 use crate::gbuffer::ShadingPoint;
+use crate::gbuffer::scale::SceneScale;
 use crate::parse::integrator::{IntegratorParams, Parameter};
 use crate::sampling::{Rng, Stratum};
 use crate::scene::Scene;
@@ -108,8 +109,10 @@ pub struct ImportanceCache {
     pub max_depth: u32,
     /// Seed of VPL generation.
     pub vpl_seed: u64,
-    /// d_c as a fraction of the scene's diagonal.
+    /// d_c as a fraction of the scene's length scale L.
     pub clamp: f32,
+    /// d_c = `clamp` · L, in scene units (resolved from the scene's length scale).
+    pub clamp_distance: f32,
     /// Samples each technique (F, U, B, C, G) draws per sub-pixel sample (0: not used; G only where the
     /// shading point has a lobe in its range): its letters in `distributions` times `light_samples`.
     pub techniques: [u32; TECHNIQUES],
@@ -274,19 +277,22 @@ impl Application for ImportanceCache {
     type Record = ImportanceRecord;
     type Prepared<'s> = Lit<'s>;
 
-    fn from_params(p: &IntegratorParams<'_>, _: &Scene) -> Result<Self> {
-        Self::read(p)
+    fn from_params(p: &IntegratorParams<'_>, scale: &SceneScale) -> Result<Self> {
+        Self::read(p, scale.length)
+    }
+
+    fn scale_derived(&self) -> Vec<(&'static str, f32)> {
+        vec![("clamp_distance", self.clamp_distance)]
     }
 
     fn prepare<'s>(&self, scene: &'s Scene, warnings: &mut Warnings) -> Result<Lit<'s>> {
         let shading = Shading::build(scene, true, warnings)?;
-        let diagonal = scene.bounds().map_or(0.0, |(lo, hi)| (hi - lo).length());
         let vpls = if shading.lights.is_empty() {
-            Vpls::none(self.clamp * diagonal)
+            Vpls::none(self.clamp_distance)
         } else {
             let select = LightSelect::new(&shading.lights, "power").map_err(Error::usage)?;
             let mut rng = Rng::keyed(self.vpl_seed, STAGE_VPLS, 0);
-            Vpls::generate(scene, &shading, &select, self.vpls, self.max_depth, self.clamp * diagonal, &mut rng)
+            Vpls::generate(scene, &shading, &select, self.vpls, self.max_depth, self.clamp_distance, &mut rng)
         };
         if !shading.lights.is_empty() && vpls.len() < self.vpls {
             warnings.general(format!(
@@ -491,6 +497,7 @@ mod tests {
             max_depth: 5,
             vpl_seed: 0,
             clamp: 0.025,
+            clamp_distance: 0.25,
             techniques: [1, 1, 1, 1, 0],
             light_samples: 1,
             lobe_cone: 45.0,

@@ -122,8 +122,8 @@ pub const PARAMETERS: &[Parameter] = &[
 ];
 
 impl ImportanceCache {
-    /// Reads [`PARAMETERS`].
-    pub(super) fn read(p: &IntegratorParams<'_>) -> Result<Self> {
+    /// Reads [`PARAMETERS`]; `l` is the scene's length scale L, which `clamp` is a fraction of.
+    pub(super) fn read(p: &IntegratorParams<'_>, l: f32) -> Result<Self> {
         let vpls = read_vpls(p)?;
         let max_depth = p.get(&VPLDEPTH)?;
         let clamp = p.get(&CLAMP)?;
@@ -148,6 +148,7 @@ impl ImportanceCache {
             max_depth: max_depth as u32,
             vpl_seed: p.get(&VPLSEED)? as u64,
             clamp: clamp as f32,
+            clamp_distance: clamp as f32 * l,
             techniques,
             light_samples,
             mis,

@@ -32,7 +32,7 @@
 //! sums and the whole for the same VPL image (`placement none` is unchanged). A lobe counts as sharp where
 //! its microfacet density exceeds [`D_MIN`] within a cone narrower than the `splitcone` angle; wider lobes
 //! are left to the estimator (their cones would hold hundreds of VPLs). The ball holds a handful of VPLs
-//! (the VPLs lie on surfaces, and d_c is 2.5 % of the scene's diagonal).
+//! (the VPLs lie on surfaces, and d_c is 2.5 % of the scene's length scale L).
 //!
 //! Depends on the VPLs and the shading layer's lobes; never on placement or the caches.
 

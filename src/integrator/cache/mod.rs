@@ -14,11 +14,14 @@ pub mod stats;
 
 pub use run::{CachedOutput, render_cached};
 pub use settings::{CacheOverrides, CacheSettings, PARAMETERS, Placement};
+pub use stats::ScaleReport;
 
 use crate::application::registry::{APPLICATIONS, WithApplication};
 use crate::application::{Application, PerPixelTerm};
 use crate::error::{Result, Warnings};
 use crate::image::Image;
+use crate::gbuffer::scale::{SceneScale, VIEW_FACTOR};
+use crate::parse::integrator::json_f32;
 use crate::parse::{Named, ParamList};
 use crate::scene::ray::RayCounters;
 use crate::scene::{Scene, filter};
@@ -59,11 +62,14 @@ fn render_pass<A: Application>(
         _ => &empty,
     };
     let p = IntegratorParams::new(A::NAME, params, &settings.set);
-    let app = A::from_params(&p, scene)?;
+    // The one length scale L of this render: the application's defaults, λ and placement all read it.
+    let scale = SceneScale::of(scene);
+    let app = A::from_params(&p, &scale)?;
     let plan = app.plan();
     let term = plan.added_per_pixel;
     let overrides = cache_sample_settings(scene, params, settings, term.is_some(), warnings);
-    let mut cs = CacheSettings::from_params(&p, &overrides, scene, A::PAPER_CACHES, settings.seed, settings.progress)?;
+    let mut cs =
+        CacheSettings::from_params(&p, &overrides, scene, scale, A::PAPER_CACHES, settings.seed, settings.progress)?;
     if !plan.dgs_geometry {
         cs.params.dgs.geometry = false;
     }
@@ -86,6 +92,7 @@ fn render_pass<A: Application>(
             out.stats.times.prepare = prepare_secs;
             out.stats.times.total += prepare_secs;
             out.stats.prepared = app.prepared_report(&cx).into_iter().map(|(k, v)| (k.to_string(), v)).collect();
+            out.stats.scale = Some(scale_report(&cs, &app));
             if let Some(why) = &without_caches {
                 out.stats.notes.push(format!("{why}: every sample is shaded without caches (placement none)"));
             }
@@ -138,6 +145,13 @@ fn add_term(out: &mut CachedOutput, term: &PerPixelTerm, (image, rays, secs): (I
     ));
 }
 
+/// The length scale L of a render and the defaults derived from it: λ unless set, and the application's.
+fn scale_report<A: Application>(cs: &CacheSettings, app: &A) -> ScaleReport {
+    let lambda = cs.params.lambda.is_none().then(|| ("lambda", cs.params.lambda_for(cs.scale.length)));
+    let derived = lambda.into_iter().chain(app.scale_derived()).map(|(k, v)| (k.to_string(), json_f32(v))).collect();
+    ScaleReport { scale: cs.scale, derived }
+}
+
 /// [`render_with`] (or its dry run) as a registry visitor: `integrator::render` and `integrator::dry_run`
 /// dispatch an integrator name through it.
 pub struct CacheRender<'a, 'w> {
@@ -170,7 +184,10 @@ pub fn help() -> String {
         out.push('\n');
         out.push_str(&help_text(&format!("{} ({}), its own parameters:", e.name, e.about), e.parameters));
     }
-    out.push_str("(L is the diagonal of the scene's bounding box.)\n");
+    out.push_str(&format!(
+        "(L is the scene's length scale: the diagonal of its bounding box, or {VIEW_FACTOR} times the extent of what \
+         the camera sees where that is smaller; README.md, \"Scene scale\".)\n"
+    ));
     out
 }
 

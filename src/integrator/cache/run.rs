@@ -154,7 +154,7 @@ pub fn render_cached<A: Application>(
     let start = Instant::now();
     let mut times = StageTimes::default();
     let mut stats = CacheStats::default();
-    let g = GBuffer::from_scene(scene);
+    let g = GBuffer::from_scene(scene, s.scale.length);
     times.shading_points = start.elapsed().as_secs_f64();
     stats.valid_pixels = g.valid_count;
     if g.valid_count == 0 {
@@ -165,7 +165,7 @@ pub fn render_cached<A: Application>(
     let mut stage2 = Vec::new();
     let mut discontinuity = None;
     let mut index_and_store = None;
-    let lambda = s.params.lambda_for(g.scene_diagonal);
+    let lambda = s.params.lambda_for(g.scale);
     let mut store = Store {
         cx,
         app,
@@ -188,7 +188,7 @@ pub fn render_cached<A: Application>(
         let t = Instant::now();
         cache_points =
             store.sites.iter().map(|&id| g.get(id).map_or((Vec3A::NAN, Vec3A::NAN), |p| (p.p, p.n))).collect();
-        let index = CacheIndex::new(&cache_points, s.params.lookup, lambda).with_scene_diagonal(g.scene_diagonal);
+        let index = CacheIndex::new(&cache_points, s.params.lookup, lambda).with_scale(g.scale);
         times.kd_tree = t.elapsed().as_secs_f64();
         stats.record_bytes = store.records.iter().map(|r| app.record_bytes(r)).sum();
         let t = Instant::now();

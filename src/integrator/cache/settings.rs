@@ -8,6 +8,7 @@
 use std::fmt;
 
 use crate::error::{Error, Result};
+use crate::gbuffer::scale::SceneScale;
 use crate::placement::{AngularMode, PlacementParams, registry};
 use crate::scene::Scene;
 
@@ -161,15 +162,18 @@ pub struct CacheSettings {
     pub seed: u64,
     /// Show progress bars.
     pub progress: bool,
+    /// The scene's length scale L (the G-buffer carries it to placement; λ's default is 0.5/L).
+    pub scale: SceneScale,
 }
 
 impl CacheSettings {
-    /// Reads the parameters of [`PARAMETERS`] for `scene` (the application's paper budget at 1920×1080 is
-    /// `paper_caches`); `o` wins over them.
+    /// Reads the parameters of [`PARAMETERS`] for `scene`, whose length scale is `scale` (the application's
+    /// paper budget at 1920×1080 is `paper_caches`); `o` wins over them.
     pub fn from_params(
         p: &IntegratorParams<'_>,
         o: &CacheOverrides,
         scene: &Scene,
+        scale: SceneScale,
         paper_caches: usize,
         seed: u64,
         progress: bool,
@@ -213,7 +217,7 @@ impl CacheSettings {
             None => Placement::parse(&written)?,
         };
         let seed = p.get_or(&SEED, seed as i64)? as u64;
-        Ok(CacheSettings { placement, caches: caches as usize, params, subpixels, seed, progress })
+        Ok(CacheSettings { placement, caches: caches as usize, params, subpixels, seed, progress, scale })
     }
 
     /// The resolved settings as JSON (the `--stats` report): every parameter of [`PARAMETERS`] with its

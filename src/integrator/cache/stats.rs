@@ -4,6 +4,7 @@
 use serde::Serialize;
 
 use super::camera_path::PathCounts;
+use crate::gbuffer::scale::{ScaleSource, SceneScale, VIEW_FACTOR};
 use crate::placement::PlacementInfo;
 use crate::scene::ray::RayCounters;
 
@@ -84,6 +85,8 @@ pub struct CacheStats {
     pub record_bytes_kept: usize,
     /// Peak resident memory of the process (bytes), where the OS reports it.
     pub peak_memory_bytes: Option<u64>,
+    /// The scene's length scale L, where it came from, and the defaults derived from it.
+    pub scale: Option<ScaleReport>,
     /// What the application prepared from the scene (`Application::prepared_report`: e.g. the VPLs
     /// generated).
     pub prepared: serde_json::Map<String, serde_json::Value>,
@@ -92,6 +95,36 @@ pub struct CacheStats {
     pub camera_paths: PathCounts,
     /// Remarks (budget above the valid pixels, …).
     pub notes: Vec<String>,
+}
+
+/// The length scale L of a render (`gbuffer::scale`) and the defaults derived from it, as `--stats` writes
+/// them: `length`, `source` (`scene_diagonal` or `camera_view`), `scene_diagonal`, `view_extent`, the rays
+/// that measured it, and `derived` (λ unless set; the application's, such as cache AO's `maxdistance` or
+/// importance caching's `clamp_distance` d_c).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ScaleReport {
+    /// L and what it was made from.
+    #[serde(flatten)]
+    pub scale: SceneScale,
+    /// Each default derived from L, by parameter name.
+    pub derived: serde_json::Map<String, serde_json::Value>,
+}
+
+impl ScaleReport {
+    /// One summary line: L, its source, and what was derived from it.
+    pub fn summary(&self) -> String {
+        let s = &self.scale;
+        let from = match (s.source, s.view_extent) {
+            (ScaleSource::CameraView, Some(v)) => {
+                format!("{VIEW_FACTOR} x camera view extent {v:.4}; scene diagonal {:.4}", s.scene_diagonal)
+            }
+            (_, Some(v)) => format!("scene diagonal; camera view extent {v:.4}"),
+            (_, None) => "scene diagonal; the camera sees nothing".to_string(),
+        };
+        let derived: Vec<String> = self.derived.iter().map(|(k, v)| format!("{k} {v}")).collect();
+        let derived = if derived.is_empty() { String::new() } else { format!(": {}", derived.join(", ")) };
+        format!("scale: L {:.4} ({from}){derived}", s.length)
+    }
 }
 
 fn ser_rays<S: serde::Serializer>(r: &RayCounters, s: S) -> Result<S::Ok, S::Error> {
@@ -150,6 +183,9 @@ impl CacheStats {
                 c.by_estimator,
                 c.escaped
             );
+        }
+        if let Some(scale) = &self.scale {
+            s += &format!("\n{}", scale.summary());
         }
         if !self.prepared.is_empty() {
             let items: Vec<String> = self.prepared.iter().map(|(k, v)| format!("{k} {v}")).collect();
