@@ -586,3 +586,30 @@ fn sky_seen_in_a_mirror_at_the_last_vertex_is_counted_as_pbrt_v3_path_counts_it(
     let out = run(&mirror_wall("Integrator \"irradiancecache\""), &set).unwrap();
     assert_all_near("mirror wall maxdepth 1", &out.image, mirror_wall_indirect());
 }
+
+/// Glossy lobes reflect the cached irradiance as if diffuse (pbrt-v2's approximation): one warning names the
+/// materials it applies to, and `--stats` (the prepared report) counts the samples it touched — all of them
+/// in a furnace of plastic, none in the matte one.
+#[test]
+fn glossy_lobes_as_diffuse_are_named_once_and_counted() {
+    let plastic = furnace(true, 8).replace(
+        &format!("Material \"matte\" \"rgb Kd\" [{RHO} {RHO} {RHO}]"),
+        "Material \"plastic\" \"rgb Kd\" [0.3 0.3 0.3] \"rgb Ks\" [0.2 0.2 0.2]",
+    );
+    assert_ne!(plastic, furnace(true, 8));
+    let set = [("placement", "vgc+dgs"), ("caches", "20"), ("gather", "8")];
+    let mut w = Warnings::default();
+    let out = run_w(&plastic, &set, None, &mut w).unwrap();
+    let glossy: Vec<_> = w.iter().filter(|w| w.msg.contains("glossy lobes reflect")).collect();
+    assert_eq!(glossy.len(), 1, "{w:?}");
+    assert!(glossy[0].msg.contains("plastic (inline.pbrt:"), "{}", glossy[0].msg);
+    let prepared = &out.cache.as_ref().unwrap().stats.prepared;
+    let reflecting = prepared["samples_reflecting"].as_u64().unwrap();
+    assert!(reflecting > 0, "{prepared:?}");
+    assert_eq!(prepared["glossy_as_diffuse"].as_u64(), Some(reflecting), "{prepared:?}");
+    assert_eq!(prepared["glossy_share"].as_f64(), Some(1.0));
+    let mut w = Warnings::default();
+    let out = run_w(&furnace(true, 8), &set, None, &mut w).unwrap();
+    assert!(!w.iter().any(|w| w.msg.contains("glossy")), "{w:?}");
+    assert_eq!(out.cache.as_ref().unwrap().stats.prepared["glossy_as_diffuse"].as_u64(), Some(0));
+}

@@ -26,6 +26,8 @@
 //!
 //! The reference gathers the same n² paths at every sub-pixel sample.
 
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use glam::Vec3A;
 
 use crate::error::{Error, Result, Warnings};
@@ -120,6 +122,9 @@ pub struct Lit<'s> {
     scene: &'s Scene,
     shading: Shading<'s>,
     select: LightSelect,
+    /// Samples that reflected cached (or gathered) irradiance, and those of them whose BSDF has a glossy
+    /// reflection lobe (reflecting it as if diffuse), for `--stats`.
+    shaded: [AtomicU64; 2],
 }
 
 impl IrradianceCache {
@@ -247,6 +252,11 @@ impl IrradianceCache {
     /// ρ_hd(ω_o)/π at a sample: the factor that turns irradiance into reflected radiance.
     fn reflectance(&self, cx: &Lit<'_>, s: &ShadingPoint) -> Spectrum {
         let Some(bsdf) = s.interaction().and_then(|si| cx.shading.bsdf(&si)) else { return Spectrum::ZERO };
+        let glossy = bsdf
+            .lobes()
+            .any(|(b, scale)| b.flags().contains(BxdfFlags::GLOSSY_REFLECTION) && scale.max_element() > 0.0);
+        cx.shaded[0].fetch_add(1, Ordering::Relaxed);
+        cx.shaded[1].fetch_add(u64::from(glossy), Ordering::Relaxed);
         diffuse_reflectance(&bsdf, s.wo, &self.rho_u) * std::f32::consts::FRAC_1_PI
     }
 }
@@ -264,6 +274,33 @@ const IN_FRONT_SLOPE: f32 = 0.05;
 fn in_front(s: &ShadingPoint, p: Vec3A, n: Vec3A) -> bool {
     let to = p - s.p;
     to.dot((s.n + n) * 0.5) > IN_FRONT_SLOPE * to.length()
+}
+
+/// Most materials [`glossy_warning`] names before it counts the rest.
+const GLOSSY_NAMED: usize = 6;
+
+/// The one warning that the cached light leaves glossy lobes as pbrt-v2's irradiance cache does, naming the
+/// materials that can have one (none: no warning).
+fn glossy_warning(scene: &Scene, shading: &Shading<'_>, warnings: &mut Warnings) {
+    let glossy: Vec<String> = (0..scene.materials.len())
+        .filter(|&i| shading.materials.may_be_glossy(i as u32))
+        .map(|i| {
+            let m = &scene.materials[i];
+            m.loc.as_ref().map_or_else(|| m.type_name.clone(), |loc| format!("{} ({loc})", m.type_name))
+        })
+        .collect();
+    if glossy.is_empty() {
+        return;
+    }
+    let more = glossy.len().saturating_sub(GLOSSY_NAMED);
+    let mut named = glossy[..glossy.len().min(GLOSSY_NAMED)].join(", ");
+    if more > 0 {
+        named += &format!(" and {more} more");
+    }
+    warnings.general(format!(
+        "{}: glossy lobes reflect the cached indirect light as if diffuse (ρ_hd·E/π, as pbrt-v2's irradiancecache does), not as their lobe would: {named}; --stats gives the share of samples this touched",
+        IrradianceCache::NAME
+    ));
 }
 
 /// ρ_hd(ω_o) over the non-specular reflection lobes of `bsdf`: the lobes that reflect cached irradiance.
@@ -308,7 +345,8 @@ impl Application for IrradianceCache {
                 Self::NAME
             ));
         }
-        Ok(Lit { scene, shading, select })
+        glossy_warning(scene, &shading, warnings);
+        Ok(Lit { scene, shading, select, shaded: Default::default() })
     }
 
     fn settings(&self) -> Vec<(&'static str, serde_json::Value)> {
@@ -322,8 +360,17 @@ impl Application for IrradianceCache {
     }
 
     /// The lights the gathering paths sample (each emitting triangle counts as one, as in pbrt-v3).
+    /// and, once the image is made, the share of shaded samples whose glossy lobes reflected the cached
+    /// light as diffuse.
     fn prepared_report(&self, cx: &Lit<'_>) -> Vec<(&'static str, serde_json::Value)> {
-        vec![("lights", cx.shading.lights.len().into())]
+        let [shaded, glossy] = [0, 1].map(|i| cx.shaded[i].load(Ordering::Relaxed));
+        let share = if shaded > 0 { glossy as f64 / shaded as f64 } else { 0.0 };
+        vec![
+            ("lights", cx.shading.lights.len().into()),
+            ("samples_reflecting", shaded.into()),
+            ("glossy_as_diffuse", glossy.into()),
+            ("glossy_share", serde_json::json!((share * 1e4).round() / 1e4)),
+        ]
     }
 
     /// `output full` adds pbrt-v3's `directlighting` with its defaults.

@@ -126,6 +126,25 @@ pub enum Compiled {
 }
 
 impl Compiled {
+    /// Whether this material can add a glossy reflection lobe (for a mix, whether either part can, given
+    /// theirs): plastic, substrate, metal, uber, translucent, and glass with a roughness that is not the
+    /// constant 0. Conservative: a glossy coefficient that happens to be black still counts.
+    pub fn may_be_glossy(&self, glossy_of: impl Fn(u32) -> bool) -> bool {
+        use super::param::FloatParam;
+        match self {
+            Compiled::Plastic { .. }
+            | Compiled::Substrate { .. }
+            | Compiled::Metal { .. }
+            | Compiled::Uber { .. }
+            | Compiled::Translucent { .. } => true,
+            Compiled::Glass { urough, vrough, .. } => {
+                !matches!((urough, vrough), (FloatParam::Const(u), FloatParam::Const(v)) if *u == 0.0 && *v == 0.0)
+            }
+            Compiled::Mix { materials, .. } => glossy_of(materials[0]) || glossy_of(materials[1]),
+            _ => false,
+        }
+    }
+
     /// Whether this material can add a perfectly specular lobe (for a mix, whether either part can, given
     /// theirs): smooth glass, mirrors and uber's Kr and Kt. Conservative: smooth glass made rough by a
     /// texture still counts.

@@ -24,6 +24,8 @@ pub struct Materials {
     compiled: Vec<Compiled>,
     /// Per material, whether its BSDF can have a perfectly specular lobe ([`Compiled::may_be_specular`]).
     specular: Vec<bool>,
+    /// Per material, whether its BSDF can have a glossy reflection lobe ([`Compiled::may_be_glossy`]).
+    glossy: Vec<bool>,
     type_names: Vec<String>,
     counted: Vec<bool>,
 }
@@ -51,13 +53,15 @@ impl Materials {
                 }
             }
         }
-        let mut specular = vec![false; compiled.len()];
+        let (mut specular, mut glossy) = (vec![false; compiled.len()], vec![false; compiled.len()]);
         for (i, c) in compiled.iter().enumerate() {
             specular[i] = c.may_be_specular(|id| specular.get(id as usize).copied().unwrap_or(false));
+            glossy[i] = c.may_be_glossy(|id| glossy.get(id as usize).copied().unwrap_or(false));
         }
         Ok(Materials {
             compiled,
             specular,
+            glossy,
             type_names: scene.materials.iter().map(|m| m.type_name.clone()).collect(),
             counted: scene.materials.iter().map(|m| m.loc.is_some()).collect(),
         })
@@ -67,6 +71,12 @@ impl Materials {
     #[inline]
     pub fn may_be_specular(&self, id: u32) -> bool {
         self.specular.get(id as usize).copied().unwrap_or(false)
+    }
+
+    /// Whether material `id`'s BSDF can have a glossy reflection lobe (false for an unknown id).
+    #[inline]
+    pub fn may_be_glossy(&self, id: u32) -> bool {
+        self.glossy.get(id as usize).copied().unwrap_or(false)
     }
 
     /// The BSDF of material `id` at `si` as pbrt-v3's `path` integrator builds it (`allowMultipleLobes`:
