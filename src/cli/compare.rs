@@ -22,7 +22,7 @@ pub struct CompareArgs {
     /// The reference image (.exr, .pfm or .png); every value must be finite.
     pub reference: PathBuf,
     /// Metrics, comma separated: rmse, relmse, flip (mean HDR-FLIP), ldrflip (mean LDR-FLIP of the images
-    /// clamped to [0, 1]).
+    /// clamped to [0, 1]), meandiff (mean(test) / mean(reference) − 1).
     #[arg(long, value_delimiter = ',', default_value = "rmse,flip")]
     pub metric: Vec<Metric>,
     /// Write the FLIP error map here: .png in the magma colour map, .exr or .pfm with the raw values. It is
@@ -97,7 +97,7 @@ pub fn run(args: &CompareArgs) -> Result<String> {
         }
     }
     if wanted.is_empty() {
-        return Err(Error::usage("--metric needs at least one of rmse, relmse, flip, ldrflip"));
+        return Err(Error::usage("--metric needs at least one of rmse, relmse, flip, ldrflip, meandiff"));
     }
     let test = windowed(image::read(&args.test)?, args.window, &args.test)?;
     let reference = windowed(image::read(&args.reference)?, args.window, &args.reference)?;

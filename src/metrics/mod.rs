@@ -47,11 +47,14 @@ pub enum Metric {
     Flip,
     /// Mean LDR-FLIP of the clamped images at the default viewing condition (`ldrflip`).
     LdrFlip,
+    /// The relative difference of the means, mean(test) / mean(reference) − 1, over all channels
+    /// (`meandiff`): the bias a renderer shows in the image's energy, which RMSE mixes with noise.
+    MeanDiff,
 }
 
 impl Metric {
     /// Every metric, in the order they are listed in messages.
-    pub const ALL: [Metric; 4] = [Metric::Rmse, Metric::RelMse, Metric::Flip, Metric::LdrFlip];
+    pub const ALL: [Metric; 5] = [Metric::Rmse, Metric::RelMse, Metric::Flip, Metric::LdrFlip, Metric::MeanDiff];
 
     /// The name used on the command line and in reports.
     pub fn name(self) -> &'static str {
@@ -60,6 +63,7 @@ impl Metric {
             Metric::RelMse => "relmse",
             Metric::Flip => "flip",
             Metric::LdrFlip => "ldrflip",
+            Metric::MeanDiff => "meandiff",
         }
     }
 
@@ -134,6 +138,10 @@ pub fn evaluate(test: &Image, reference: &Image, metrics: &[Metric]) -> Result<E
                 eval.ldr_flip = Some(map);
                 mean
             }
+            Metric::MeanDiff => {
+                let mean = |im: &Image| im.mean().iter().sum::<f64>() / 3.0;
+                mean(test) / mean(reference) - 1.0
+            }
         };
         eval.values.push((m, value));
     }
@@ -172,6 +180,14 @@ mod tests {
     use super::*;
 
     #[test]
+    fn meandiff_is_the_relative_difference_of_the_means() {
+        let test = Image::from_pixels(2, 1, vec![[1.0, 2.0, 3.0], [3.0, 2.0, 1.0]]).unwrap();
+        let reference = Image::from_pixels(2, 1, vec![[2.0; 3], [2.5; 3]]).unwrap();
+        let v = compare(&test, &reference, &[Metric::MeanDiff]).unwrap()[0].1;
+        assert!((v - (2.0 / 2.25 - 1.0)).abs() < 1e-12, "{v}");
+    }
+
+    #[test]
     fn names_round_trip() {
         for m in Metric::ALL {
             assert_eq!(m.name().parse::<Metric>().unwrap(), m);
@@ -179,7 +195,7 @@ mod tests {
         }
         assert_eq!(" FLIP ".parse::<Metric>().unwrap(), Metric::Flip);
         let e = "psnr".parse::<Metric>().unwrap_err().to_string();
-        assert!(e.contains("\"psnr\"") && e.contains("rmse, relmse, flip, ldrflip"), "{e}");
+        assert!(e.contains("\"psnr\"") && e.contains("rmse, relmse, flip, ldrflip, meandiff"), "{e}");
         assert_eq!(Metric::parse_list("rmse, flip,rmse").unwrap(), vec![Metric::Rmse, Metric::Flip]);
         assert!(Metric::parse_list("rmse,").is_err());
     }
