@@ -246,6 +246,27 @@ impl ImportanceCache {
         l
     }
 
+    /// A sample's light without caches: its emission plus, with `sampling` `Cache`, the exact sum over every
+    /// VPL (the reference), else the baseline that draws VPLs that way.
+    fn without_caches(
+        &self,
+        cx: &Lit<'_>,
+        s: &ShadingPoint,
+        sampling: Sampling,
+        rng: &mut Rng,
+        stratum: Stratum,
+        rays: &mut RayCounters,
+    ) -> [f32; 3] {
+        let mut l = cx.emitted(s);
+        if let Some(x) = cx.receiver(s) {
+            l += match sampling {
+                Sampling::Cache => (0..cx.vpls.len()).map(|j| cx.contribution(j, &x, rays)).sum(),
+                _ => self.baseline(cx, &x, sampling, rng, stratum, rays),
+            };
+        }
+        l.to_array()
+    }
+
     /// The B distribution of a cache at `at` serving a region of radius `region`.
     fn bounded(&self, cx: &Lit<'_>, at: &ShadingPoint, region: f32) -> Option<Quantised> {
         let x = cx.receiver(at)?;
@@ -448,14 +469,7 @@ impl Application for ImportanceCache {
         stratum: Stratum,
         rays: &mut RayCounters,
     ) -> [f32; 3] {
-        let mut l = cx.emitted(s);
-        if let Some(x) = cx.receiver(s) {
-            l += match self.sampling {
-                Sampling::Cache => (0..cx.vpls.len()).map(|j| cx.contribution(j, &x, rays)).sum(),
-                _ => self.baseline(cx, &x, self.sampling, rng, stratum, rays),
-            };
-        }
-        l.to_array()
+        self.without_caches(cx, s, self.sampling, rng, stratum, rays)
     }
 
     /// Where no cache serves a sample (a point seen in a mirror or through glass, away from every cache):
@@ -469,11 +483,7 @@ impl Application for ImportanceCache {
         stratum: Stratum,
         rays: &mut RayCounters,
     ) -> [f32; 3] {
-        let mut l = cx.emitted(s);
-        if let Some(x) = cx.receiver(s) {
-            l += self.baseline(cx, &x, Sampling::Power, rng, stratum, rays);
-        }
-        l.to_array()
+        self.without_caches(cx, s, Sampling::Power, rng, stratum, rays)
     }
 
     fn record_bytes(&self, record: &ImportanceRecord) -> usize {
