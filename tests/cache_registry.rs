@@ -272,3 +272,23 @@ fn the_command_line_placement_and_budget_win_and_the_stats_report_the_resolved_s
     let e = cachert::cli::Cli::try_parse_from(["cachert", "render", "--placement", "vgc+foo", "x.pbrt"]).unwrap_err();
     assert!(e.to_string().contains("vgc+dgs:geom"), "{e}");
 }
+
+/// `--stats -` writes the statistics to standard output, as `-` means for every pbrt-style tool, and makes
+/// no file named `-`.
+#[test]
+fn stats_to_a_dash_go_to_standard_output() {
+    let dir = common::TempDir::new("registry-stats-dash");
+    let scene = dir.write("s.pbrt", SCENE);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_cachert"))
+        .args(["render", "--quick", "--quiet", "--integrator", APPLICATIONS[0].name, "--stats", "-"])
+        .args(["--outfile", "o.pfm", scene.to_str().unwrap()])
+        .current_dir(&dir.0)
+        .output()
+        .expect("the binary runs");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let json = &stdout[stdout.find('{').expect("JSON on standard output")..];
+    let v: serde_json::Value = serde_json::from_str(json.trim()).expect("one JSON object");
+    assert!(v["stats"]["times"]["total"].is_number(), "{v:#}");
+    assert!(!dir.path("-").exists(), "a file named - was written");
+}

@@ -55,7 +55,8 @@ pub struct RenderArgs {
     /// Cache-based renders: write the DGS discontinuity map (EXR/PFM, plus a PNG preview).
     #[arg(long)]
     pub dmap: Option<PathBuf>,
-    /// Cache-based renders: write per-stage times, cache counts, search results, rays and memory as JSON.
+    /// Cache-based renders: write per-stage times, cache counts, search results, rays and memory as JSON
+    /// (`-`: to standard output).
     #[arg(long)]
     pub stats: Option<PathBuf>,
     /// Set an integrator parameter, overriding the scene file (repeatable), e.g. --set nsamples=16.

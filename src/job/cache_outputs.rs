@@ -55,10 +55,14 @@ pub fn write_dmap(out: &CachedOutput, path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Writes the statistics as JSON (atomically, like every output).
+/// Writes the statistics as JSON (atomically, like every output), or to standard output when `path` is `-`.
 pub fn write_stats(out: &CachedOutput, settings: &serde_json::Value, path: &Path) -> Result<()> {
     let v = serde_json::json!({ "settings": settings, "stats": &out.stats });
     let text =
         serde_json::to_string_pretty(&v).map_err(|e| Error::file(path, format!("cannot encode statistics: {e}")))?;
+    if path == Path::new("-") {
+        println!("{text}");
+        return Ok(());
+    }
     crate::image::write_bytes(path, text.as_bytes())
 }
