@@ -349,6 +349,10 @@ impl Application for IrradianceCache {
         Ok(Lit { scene, shading, select, shaded: Default::default() })
     }
 
+    fn shading<'a, 's>(&self, cx: &'a Self::Prepared<'s>) -> Option<&'a Shading<'s>> {
+        Some(&cx.shading)
+    }
+
     fn settings(&self) -> Vec<(&'static str, serde_json::Value)> {
         let n = (self.dirs.len() as f64).sqrt().round() as u64;
         vec![

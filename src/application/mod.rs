@@ -49,6 +49,7 @@ use crate::parse::integrator::{IntegratorParams, Parameter};
 use crate::sampling::{Rng, Stratum};
 use crate::scene::Scene;
 use crate::scene::ray::RayCounters;
+use crate::shading::lighting::Shading;
 
 /// One cache selected for a shading point (ALGORITHMS.md §5): its record, where it is, and its
 /// interpolation weight.
@@ -221,6 +222,14 @@ pub trait Application: Sync + Sized {
     fn prepared_report(&self, cx: &Self::Prepared<'_>) -> Vec<(&'static str, serde_json::Value)> {
         let _ = cx;
         Vec::new()
+    }
+
+    /// The shading data [`Application::prepare`] built, if any: the driver's camera paths read their BSDFs
+    /// and lights from it rather than reading the scene's textures and lights a second time (the default:
+    /// none, and the driver builds its own where the plan needs one).
+    fn shading<'a, 's>(&self, cx: &'a Self::Prepared<'s>) -> Option<&'a Shading<'s>> {
+        let _ = cx;
+        None
     }
 
     /// What these settings ask of the driver beyond caches (the default: nothing; see [`CachePlan`]).

@@ -338,6 +338,10 @@ impl Application for ImportanceCache {
         Ok(Lit { scene, shading, vpls, flux_cdf, split, lobes })
     }
 
+    fn shading<'a, 's>(&self, cx: &'a Self::Prepared<'s>) -> Option<&'a Shading<'s>> {
+        Some(&cx.shading)
+    }
+
     fn settings(&self) -> Vec<(&'static str, serde_json::Value)> {
         self.settings_report()
     }

@@ -74,26 +74,34 @@ impl PathCounts {
 }
 
 /// Traces camera paths in one scene for one application's plan.
-pub struct CameraPaths<'s> {
+pub struct CameraPaths<'a, 's> {
     scene: &'s Scene,
-    /// BSDFs and lights; `None` when the plan follows nothing and adds nothing.
-    shading: Option<Shading<'s>>,
+    /// BSDFs and lights, the application's (`borrowed`) or built here; `None` for both when the plan
+    /// follows nothing and adds nothing.
+    borrowed: Option<&'a Shading<'s>>,
+    owned: Option<Shading<'s>>,
     follow_specular: bool,
     environment: bool,
 }
 
-impl<'s> CameraPaths<'s> {
-    /// The paths `plan` asks for in `scene` (the shading data is built only when it asks for any; its
-    /// warnings are the application's to give, so they are dropped here).
-    pub fn new(scene: &'s Scene, plan: &CachePlan) -> Result<Self> {
+impl<'a, 's> CameraPaths<'a, 's> {
+    /// The paths `plan` asks for in `scene`, reading BSDFs and lights from `shading` (the application's
+    /// own) when given; else they are built here, only when the plan asks for any (their warnings are the
+    /// application's to give, so they are dropped here).
+    pub fn new(scene: &'s Scene, plan: &CachePlan, shading: Option<&'a Shading<'s>>) -> Result<Self> {
         let (follow_specular, environment) = (plan.follow_specular, plan.shows_environment);
-        let shading = if follow_specular || environment {
-            // Smooth glass as two lobes, reflection and transmission, as `directlighting` has it.
-            Some(Shading::build(scene, false, &mut Warnings::default())?)
-        } else {
-            None
+        let wanted = follow_specular || environment;
+        let owned = match shading {
+            None if wanted => Some(Shading::build(scene, false, &mut Warnings::default())?),
+            _ => None,
         };
-        Ok(CameraPaths { scene, shading, follow_specular, environment })
+        let borrowed = shading.filter(|_| wanted);
+        Ok(CameraPaths { scene, borrowed, owned, follow_specular, environment })
+    }
+
+    /// The shading data the paths read, if the plan needs any.
+    fn shading(&self) -> Option<&Shading<'s>> {
+        self.borrowed.or(self.owned.as_ref())
     }
 
     /// Traces the camera ray `ray` (from the camera at `eye`): writes the vertices to shade into `out`
@@ -130,7 +138,7 @@ impl<'s> CameraPaths<'s> {
         for _ in 0..MAX_PASS_THROUGH {
             let Some(si) = self.scene.geometry.intersect(&ray) else {
                 counts.escaped += 1;
-                return match &self.shading {
+                return match self.shading() {
                     Some(sh) if self.environment => weight * sh.lights.le_escaped(&ray),
                     _ => Spectrum::ZERO,
                 };
@@ -144,12 +152,14 @@ impl<'s> CameraPaths<'s> {
             let index = out.len() as u32;
             // A material that cannot be specular needs no BSDF here: the vertex is the caches' to shade.
             let follows = |sh: &&Shading<'_>| self.follow_specular && sh.materials.may_be_specular(si.material);
-            let Some(sh) = self.shading.as_ref().filter(follows) else {
+            let Some(sh) = self.shading().filter(follows) else {
                 counts.after_specular += u64::from(depth > 0);
                 out.push(Vertex { weight, point, index, bounces: depth });
                 return Spectrum::ZERO;
             };
-            let bsdf = sh.bsdf(&si);
+            // Smooth glass as two lobes, reflection and transmission, as `directlighting` has it, whatever
+            // the application's own shading uses.
+            let bsdf = sh.materials.bsdf_with(si.material, &si, &sh.textures, false);
             let specular = bsdf.is_some_and(|b| b.lobes().any(|(l, _)| l.flags().contains(BxdfFlags::SPECULAR)));
             let mut l = Spectrum::ZERO;
             if !specular || bsdf.is_some_and(|b| b.num_components(BxdfFlags::NON_SPECULAR) > 0) {
@@ -193,7 +203,7 @@ mod tests {
     }
 
     fn trace(s: &Scene, p: &CachePlan) -> (Spectrum, Vec<Vertex>, PathCounts) {
-        let paths = CameraPaths::new(s, p).unwrap();
+        let paths = CameraPaths::new(s, p, None).unwrap();
         let ray = s.camera.generate_ray([4.0, 4.0], [0.5, 0.5]);
         let (mut out, mut counts, mut rays) = (Vec::new(), PathCounts::default(), RayCounters::default());
         let l = paths.trace(ray, s.camera.position(), &mut out, &mut counts, &mut rays);

@@ -203,7 +203,7 @@ pub fn render_cached<A: Application>(
     let t = Instant::now();
     let caches =
         Caches { index: index_and_store.as_ref(), records: &store.records, points: &cache_points, radii: &radii };
-    let paths = CameraPaths::new(scene, &app.plan())?;
+    let paths = CameraPaths::new(scene, &app.plan(), app.shading(cx))?;
     let (image, render_rays, path_counts) = shade_image(scene, app, cx, s, &caches, &paths, none);
     stats.camera_paths = path_counts;
     times.render = t.elapsed().as_secs_f64();
@@ -324,7 +324,7 @@ fn shade_image<A: Application>(
     cx: &A::Prepared<'_>,
     s: &CacheSettings,
     caches: &Caches<'_, A::Record>,
-    paths: &CameraPaths<'_>,
+    paths: &CameraPaths<'_, '_>,
     reference: bool,
 ) -> (Image, RayCounters, PathCounts) {
     let b = scene.film.cropped_bounds();
