@@ -321,6 +321,8 @@ impl Application for IrradianceCache {
     const PARAMETERS: &'static [Parameter] = &[GATHER.row, MAXDEPTH.row, OUTPUT.row, REJECT_IN_FRONT.row];
 
     const PAPER_CACHES: usize = 40_000;
+    /// The vertices of a gathering path that sample a light, pbrt-v2's `maxindirectdepth`.
+    const PATH_DEPTH: Option<&'static str> = Some("maxdepth");
     /// gather² paths at every sub-pixel sample.
     const STUDY: Study<Self> =
         Study { quick: &[("gather", "16")], per_sample: Some(PerSample { count: "gather", set: &[] }), ..Study::NONE };

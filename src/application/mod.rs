@@ -183,6 +183,12 @@ pub trait Application: Sync + Sized {
     /// table under the application's name.
     const PARAMETERS: &'static [Parameter];
 
+    /// The parameter whose value is pbrt-v3 `path`'s `maxdepth` − 1 (the surface vertices of a light path
+    /// beyond the receiver), if the application carries light along paths: a render that replaces a
+    /// scene's `path`, `volpath` or `bdpt` takes it from that integrator's `maxdepth`, so the image has the
+    /// light paths of the scene's own (the default: none).
+    const PATH_DEPTH: Option<&'static str> = None;
+
     /// The paper's cache budget for this application at 1920×1080 (ALGORITHMS.md §7): the default budget
     /// `caches` scales it to the image's pixels.
     const PAPER_CACHES: usize = 120_000;

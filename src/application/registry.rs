@@ -25,6 +25,8 @@ pub struct Entry {
     pub quick: &'static [(&'static str, &'static str)],
     /// The paper's budget at 1920×1080 (`Application::PAPER_CACHES`).
     pub paper_caches: usize,
+    /// [`Application::PATH_DEPTH`].
+    pub path_depth: Option<&'static str>,
     /// Its own estimator per pixel (`Study::per_sample` of `Application::STUDY`).
     pub per_sample: Option<PerSample>,
 }
@@ -38,6 +40,7 @@ impl Entry {
             parameters: A::PARAMETERS,
             quick: A::STUDY.quick,
             paper_caches: A::PAPER_CACHES,
+            path_depth: A::PATH_DEPTH,
             per_sample: A::STUDY.per_sample,
         }
     }

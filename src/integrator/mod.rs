@@ -108,6 +108,24 @@ pub fn dry_run(
     render_pass(scene, integrator, settings, warnings, Pass::DryRun).map(|_| ())
 }
 
+/// pbrt-v3 integrators whose `maxdepth` is the length of a light path (`volpath` without media is `path`).
+const PATH_LIKE: &[&str] = &["path", "volpath", "bdpt"];
+
+/// The light-path depth a cache integrator `name` takes from the scene's path-like integrator that it
+/// replaces: its [`Application::PATH_DEPTH`](crate::application::Application::PATH_DEPTH) parameter set to
+/// `maxdepth` − 1 (pbrt-v3's default `maxdepth` 5 when the line has none), within the parameter's range
+/// 0–64; `None` when the parameter is set with `--set`, the application has no such parameter, or the
+/// scene's integrator is not path-like.
+fn inherited_depth(integrator: Option<&Named>, name: &str, settings: &RenderSettings) -> Option<(String, String)> {
+    let n = integrator.filter(|n| n.name != name && PATH_LIKE.contains(&n.name.as_str()))?;
+    let key = registry::entry(name)?.path_depth?;
+    if settings.set.iter().any(|(k, _)| k == key) {
+        return None;
+    }
+    let maxdepth = n.params.int("maxdepth").ok().flatten().unwrap_or(5);
+    Some((key.to_string(), (maxdepth.saturating_sub(1)).clamp(0, 64).to_string()))
+}
+
 /// [`render`] or [`dry_run`]: `None` for a dry run.
 fn render_pass(
     scene: &Scene,
@@ -131,16 +149,26 @@ fn render_pass(
         }
         sampler.spp = spp;
     }
+    let depth = inherited_depth(integrator, name, settings);
     if let Some(n) = integrator.filter(|n| n.name != name && !n.params.is_empty()) {
-        warnings.at(
-            &n.name_loc,
-            format!(
-                "Integrator \"{}\" is replaced by --integrator {name}; its parameters ({}) are not used",
-                n.name,
-                n.params.iter().map(|p| p.name.as_str()).collect::<Vec<_>>().join(", ")
-            ),
-        );
+        let unused: Vec<&str> =
+            n.params.iter().map(|p| p.name.as_str()).filter(|&p| depth.is_none() || p != "maxdepth").collect();
+        let carried = depth.as_ref().map(|(k, v)| format!("its \"maxdepth\" gives {name}'s \"{k}\" {v}"));
+        let unused = (!unused.is_empty()).then(|| format!("its parameters ({}) are not used", unused.join(", ")));
+        let what = carried.into_iter().chain(unused).collect::<Vec<_>>().join("; ");
+        warnings.at(&n.name_loc, format!("Integrator \"{}\" is replaced by --integrator {name}; {what}", n.name));
     }
+    let with_depth;
+    let settings = match depth {
+        Some(kv) => {
+            with_depth = RenderSettings {
+                set: std::iter::once(kv).chain(settings.set.iter().cloned()).collect(),
+                ..settings.clone()
+            };
+            &with_depth
+        }
+        None => settings,
+    };
     let cache = cache::CacheRender { scene, integrator, settings, warnings: &mut *warnings, pass };
     if let Some(out) = registry::dispatch(name, cache) {
         return out;

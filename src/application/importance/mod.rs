@@ -32,6 +32,7 @@
 //!
 //! Its parameters are declared and read in [`params`].
 
+mod compensation;
 pub mod distribution;
 pub mod lobe;
 pub mod mixture;
@@ -113,6 +114,8 @@ pub struct ImportanceCache {
     pub clamp: f32,
     /// d_c = `clamp` · L, in scene units (resolved from the scene's length scale).
     pub clamp_distance: f32,
+    /// VPLs drawn where the clamp's loss is put back, per sample (0: not put back; [`compensation`]).
+    pub compensate: u32,
     /// Samples each technique (F, U, B, C, G) draws per sub-pixel sample (0: not used; G only where the
     /// shading point has a lobe in its range): its letters in `distributions` times `light_samples`.
     pub techniques: [u32; TECHNIQUES],
@@ -263,6 +266,7 @@ impl ImportanceCache {
                 Sampling::Cache => (0..cx.vpls.len()).map(|j| cx.contribution(j, &x, rays)).sum(),
                 _ => self.baseline(cx, &x, sampling, rng, stratum, rays),
             };
+            l += compensation::clamp_loss(cx, &x, self.compensate, rng, rays);
         }
         l.to_array()
     }
@@ -287,6 +291,8 @@ impl Application for ImportanceCache {
         "importance caching: light from virtual point lights drawn by MIS from cached distributions";
     const PARAMETERS: &'static [Parameter] = params::PARAMETERS;
     const PAPER_CACHES: usize = 25_000;
+    /// A light path's surface vertices: pbrt-v3 `path`'s maxdepth counts the camera's vertex too.
+    const PATH_DEPTH: Option<&'static str> = Some("vpldepth");
     /// `draws` VPLs drawn by flux at every sub-pixel sample (the VPL sum the reference evaluates whole); the
     /// power and uniform baselines.
     const STUDY: Study<Self> = Study {
@@ -461,6 +467,7 @@ impl Application for ImportanceCache {
                     }
                 }
             }
+            l += compensation::clamp_loss(cx, &x, self.compensate, rng, rays);
         }
         l.to_array()
     }
@@ -512,6 +519,7 @@ mod tests {
             vpl_seed: 0,
             clamp: 0.025,
             clamp_distance: 0.25,
+            compensate: 4,
             techniques: [1, 1, 1, 1, 0],
             light_samples: 1,
             lobe_cone: 45.0,

@@ -20,8 +20,12 @@ const MAX_VPLS: i64 = 1 << 26;
 pub const VPLS: ParamDef<i64> =
     ParamDef::int("vpls", 8192, "virtual point lights (direct and indirect light)").between(1, MAX_VPLS);
 /// `vpldepth`.
-pub const VPLDEPTH: ParamDef<i64> =
-    ParamDef::int("vpldepth", 5, "most surface vertices of a light path").between(0, 64);
+pub const VPLDEPTH: ParamDef<i64> = ParamDef::int(
+    "vpldepth",
+    4,
+    "most surface vertices of a light path beyond the receiver (pbrt-v3 path maxdepth − 1)",
+)
+.between(0, 64);
 /// `vplseed`.
 pub const VPLSEED: ParamDef<i64> =
     ParamDef::int("vplseed", 0, "seed of the VPLs (fixed across --seed, so seeds share one reference)");
@@ -29,6 +33,14 @@ pub const VPLSEED: ParamDef<i64> =
 pub const CLAMP: ParamDef<f64> =
     ParamDef::float("clamp", 0.025, "distance clamp d_c as a fraction of L (estimator and reference alike)")
         .valid(Valid::AtLeast { lo: 0.0, finite: true });
+/// `compensate`: VPLs drawn where the clamp's loss is put back (0: the clamped sum alone).
+pub const COMPENSATE: ParamDef<i64> = ParamDef::int(
+    "compensate",
+    4,
+    "the light the clamp removes is put back: one ray of length d_c from the shading point, and this many VPLs \
+     drawn by flux at the surface it finds (estimator and reference alike; 0: the clamped sum alone)",
+)
+.between(0, MAX_TECHNIQUE_DRAWS as i64);
 /// `distributions`: the letters of the techniques that draw.
 pub const DISTRIBUTIONS: ParamDef<String> = ParamDef::text(
     "distributions",
@@ -109,6 +121,7 @@ pub const PARAMETERS: &[Parameter] = &[
     VPLDEPTH.row,
     VPLSEED.row,
     CLAMP.row,
+    COMPENSATE.row,
     DISTRIBUTIONS.row,
     LIGHTSAMPLES.row,
     MIS.row,
@@ -149,6 +162,7 @@ impl ImportanceCache {
             vpl_seed: p.get(&VPLSEED)? as u64,
             clamp: clamp as f32,
             clamp_distance: clamp as f32 * l,
+            compensate: p.get(&COMPENSATE)? as u32,
             techniques,
             light_samples,
             mis,
@@ -164,6 +178,7 @@ impl ImportanceCache {
             ("vpldepth", self.max_depth.into()),
             ("vplseed", self.vpl_seed.into()),
             ("clamp", number(self.clamp)),
+            ("compensate", self.compensate.into()),
             ("distributions", self.letters().into()),
             ("lightsamples", self.light_samples.into()),
             ("mis", if self.mis == Mis::Balance { "balance" } else { "alphamax" }.into()),
@@ -189,6 +204,7 @@ impl ImportanceCache {
                     ("vpldepth", self.max_depth.to_string()),
                     ("vplseed", self.vpl_seed.to_string()),
                     ("clamp", self.clamp.to_string()),
+                    ("compensate", self.compensate.to_string()),
                     ("distributions", self.letters()),
                     ("splitcone", self.split_cone.to_string()),
                     ("splitnear", self.split_near.to_string()),
