@@ -31,10 +31,17 @@ use super::Lit;
 use super::vpl::Receiver;
 
 /// ΔL(x) estimated with one direction from `x` and, where it finds a surface nearer than d_c, `draws`
-/// VPLs drawn by flux there (0 draws, or no clamp: nothing). Draws its random numbers from `rng`.
-pub(super) fn clamp_loss(cx: &Lit<'_>, x: &Receiver, draws: u32, rng: &mut Rng, rays: &mut RayCounters) -> Spectrum {
-    clamp_loss_at(cx, x, draws, LEVELS, rng, rays)
+/// VPLs drawn by flux there (0 draws, or no clamp: nothing). `sample` is the sample's own random stream at
+/// the start of its shading, which is left untouched: the term draws from a stream of its own keyed by
+/// `sample`'s state, so it is the same term, bit for bit, in the estimator and in its per-sample reference
+/// (which start every sample from the same stream), and their difference is the caches' alone.
+pub(super) fn clamp_loss(cx: &Lit<'_>, x: &Receiver, draws: u32, sample: &Rng, rays: &mut RayCounters) -> Spectrum {
+    let mut rng = Rng::new(sample.clone().next_u64() ^ STREAM);
+    clamp_loss_at(cx, x, draws, LEVELS, &mut rng, rays)
 }
+
+/// Salt of the compensation's stream ("compensa").
+const STREAM: u64 = 0x636f_6d70_656e_7361;
 
 /// Levels of compensation: the loss at the surface a compensation ray finds is put back too, this many
 /// times in all.

@@ -260,13 +260,14 @@ impl ImportanceCache {
         stratum: Stratum,
         rays: &mut RayCounters,
     ) -> [f32; 3] {
+        let start = rng.clone();
         let mut l = cx.emitted(s);
         if let Some(x) = cx.receiver(s) {
             l += match sampling {
                 Sampling::Cache => (0..cx.vpls.len()).map(|j| cx.contribution(j, &x, rays)).sum(),
                 _ => self.baseline(cx, &x, sampling, rng, stratum, rays),
             };
-            l += compensation::clamp_loss(cx, &x, self.compensate, rng, rays);
+            l += compensation::clamp_loss(cx, &x, self.compensate, &start, rays);
         }
         l.to_array()
     }
@@ -441,6 +442,7 @@ impl Application for ImportanceCache {
         stratum: Stratum,
         rays: &mut RayCounters,
     ) -> [f32; 3] {
+        let start = rng.clone();
         let mut l = cx.emitted(s);
         if let Some(x) = cx.receiver(s) {
             let lobe = match self.techniques[LOBE] {
@@ -467,7 +469,7 @@ impl Application for ImportanceCache {
                     }
                 }
             }
-            l += compensation::clamp_loss(cx, &x, self.compensate, rng, rays);
+            l += compensation::clamp_loss(cx, &x, self.compensate, &start, rays);
         }
         l.to_array()
     }
