@@ -2,7 +2,7 @@
 # The cache integrators on real scenes against pbrt-v3 `path` (issue 41): for each scene, pbrt-v3 renders a
 # small reference (`path`, maxdepth 5, 256 random samples per pixel, box filter; camera and world unchanged)
 # and cachert renders importance caching (vgc+dgs at its default budget, and `none`, the exact VPL sum) and
-# irradiance caching (`output full`) at the same size; `cachert compare` scores each against the reference.
+# irradiance caching (`output full`) at the same size, with the reference's light paths; `cachert compare` scores each against the reference.
 # Prints a Markdown table (results.md). Run from the repository root after `cargo build --release`:
 #   bash experiments/results/i41-real-scenes/run.sh > experiments/results/i41-real-scenes/results.md
 # $CACHERT picks another binary (e.g. an older build, for a before/after); references and images go to
@@ -36,11 +36,14 @@ while read -r name file w h; do
     rm -f "$tmp"
   fi
   [ -e "$ref" ] || { echo "| $name | pbrt-v3 failed | | | | |"; continue; }
-  for run in "importancecache placement=vgc+dgs" "importancecache placement=none" "irradiancecache output=full"; do
+  # The light paths of the reference's maxdepth 5 (the scenes' own lines say 1, 17 or 65, which a cache render
+  # that replaces them would take): vpldepth 4 and irradiance caching's maxdepth 4.
+  for run in "importancecache placement=vgc+dgs vpldepth=4" "importancecache placement=none vpldepth=4" \
+             "irradiancecache output=full maxdepth=4"; do
     set -- $run
     img="$OUT/$name-$1-${2//[=+]/_}.pfm"
     start=$(date +%s.%N)
-    "$C" render --quiet --nthreads 2 --resolution "${w}x$h" --integrator "$1" --set "$2" --outfile "$img" "$S/$file" 2> /dev/null
+    "$C" render --quiet --nthreads 2 --resolution "${w}x$h" --integrator "$1" --set "$2" --set "$3" --outfile "$img" "$S/$file" 2> /dev/null
     secs=$(echo "$(date +%s.%N) - $start" | bc)
     read -r md rmse flip <<< "$("$C" compare --metric meandiff,rmse,flip "$img" "$ref" | awk '{print $2}' | tr '\n' ' ')"
     awk -v n="$name" -v i="$1 $2" -v md="$md" -v r="$rmse" -v f="$flip" -v s="$secs" \
