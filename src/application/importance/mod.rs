@@ -267,7 +267,7 @@ impl ImportanceCache {
                 Sampling::Cache => (0..cx.vpls.len()).map(|j| cx.contribution(j, &x, rays)).sum(),
                 _ => self.baseline(cx, &x, sampling, rng, stratum, rays),
             };
-            l += compensation::clamp_loss(cx, &x, self.compensate, &start, rays);
+            l += compensation::clamp_loss(cx, &x, self.compensate, self.max_depth, &start, rays);
         }
         l.to_array()
     }
@@ -469,7 +469,7 @@ impl Application for ImportanceCache {
                     }
                 }
             }
-            l += compensation::clamp_loss(cx, &x, self.compensate, &start, rays);
+            l += compensation::clamp_loss(cx, &x, self.compensate, self.max_depth, &start, rays);
         }
         l.to_array()
     }
