@@ -220,7 +220,7 @@ fn the_per_sample_reference_of_importance_caching_agrees_with_pbrt_v3_in_the_mea
     // Importance caching's reference sums all VPLs of one set of light paths, each clamped at d_c, plus the
     // clamp's loss put back (`compensate`): with `vpldepth` 4 it estimates pbrt-v3's `path` (maxdepth 5) up
     // to that one set's error. The golden's 1024 VPLs of vplseed 0 are one heavy-tailed draw (−3.8 %; seeds
-    // 1 and 2: −0.6 %, −1.0 %), so the golden's settings are rendered here with 8192 VPLs. Measured: −0.64 %
+    // 1 and 2: −0.6 %, −1.0 %), so the golden's settings are rendered here with 8192 VPLs. Measured: −0.52 %
     // (−1.47 % with compensate 0; before issue 41, vpldepth 5 and no compensation gave the golden −2.08 %).
     let loaded = cachert::scene::load(
         &root().join("scenes/room.pbrt"),
