@@ -658,3 +658,29 @@ fn the_light_the_clamp_removes_is_put_back() {
     assert!(clamped < -0.03, "the clamp must remove light here for the test to mean anything: {clamped}");
     assert!(compensated.abs() < 0.008, "{compensated}");
 }
+
+#[test]
+fn vpls_on_a_mesh_with_shading_normals_reflect_as_pbrt_v3_does() {
+    // Light paths from the lights carry importance: at a vertex with shading normals the light a VPL sends
+    // on is f · |ω_in·n_s| · |ω_out·n_g| / |ω_in·n_g| (pbrt-v3's CorrectShadingNormal), not the radiance
+    // BSDF's f · |ω_out·n_s|. The octahedron's shading normals lean up to 35° from its faces, and the light it
+    // reflects onto the floor is a third of the image; the scene's `path` maxdepth 2 gives vpldepth 1.
+    // Measured (16384 VPLs, vgc+dgs, 4 VPL seeds): −0.17 %; with the radiance BSDF (c15e6f4): −2.26 %.
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/pbrt-v3/shading-normals");
+    let reference = cachert::image::read(&dir.join("octahedron.pfm")).unwrap();
+    let loaded = load(&dir.join("octahedron.pbrt"), LoadOptions::default()).unwrap();
+    let mean = |im: &Image| im.pixels.iter().flatten().map(|&v| v as f64).sum::<f64>() / (3 * im.pixels.len()) as f64;
+    let ours: f64 = (0..4)
+        .map(|seed| {
+            let s = seed.to_string();
+            let set = [("vpls", "16384"), ("compensate", "4"), ("vplseed", &s)];
+            let out = render_with(&loaded, &set, seed, None).unwrap();
+            assert_eq!(out.cache.as_ref().unwrap().settings["vpldepth"], 1, "the scene's path maxdepth 2");
+            mean(&out.image)
+        })
+        .sum::<f64>()
+        / 4.0;
+    let dev = ours / mean(&reference) - 1.0;
+    eprintln!("octahedron: importancecache {:+.2} % against pbrt-v3 path maxdepth 2", 100.0 * dev);
+    assert!(dev.abs() < 0.01, "{dev}");
+}
