@@ -488,11 +488,11 @@ fn failed_runs_leave_no_file_behind() {
         (&["render", "good.pbrt", "--outfile", "out.exr", "--integrator", "bdpt"], &path_message),
         (
             &["render", "good.pbrt", "--outfile", "out.xyz"],
-            "error: \"out.xyz\": unknown image file extension; use .exr, .pfm or .png",
+            "error: --outfile: \"out.xyz\": unknown image file extension; use .exr, .pfm or .png",
         ),
         (
             &["render", "good.pbrt", "--outfile", "no/such/dir/out.exr"],
-            "error: no/such/dir/out.exr: cannot create: No such file or directory (os error 2)",
+            "error: --outfile no/such/dir/out.exr: the folder \"no/such/dir\" does not exist",
         ),
     ];
     for (args, first_line) in cases {

@@ -3,22 +3,13 @@
 //! are `maxdepth` − 1, so the image has the light paths of the scene's own integrator; `--set` wins, and the
 //! warning about the replaced line says what was carried over.
 
+mod common;
+
 use std::path::Path;
 
 use cachert::Warnings;
 use cachert::integrator::{RenderSettings, render};
 use cachert::scene::{LoadOptions, load_str};
-
-/// A lit plane with the `Integrator` line `integrator`, 8×8.
-fn scene(integrator: &str) -> String {
-    format!(
-        "{integrator}\nLookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [30]\n\
-         Film \"image\" \"integer xresolution\" [8] \"integer yresolution\" [8]\nWorldBegin\n\
-         LightSource \"point\" \"point from\" [0 0 3] \"rgb I\" [5 5 5]\nMaterial \"matte\"\n\
-         Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-5 -5 0  5 -5 0  5 5 0  -5 5 0]\n\
-         WorldEnd\n"
-    )
-}
 
 /// Renders `text` with cache integrator `name` and `set`; returns the resolved value of `key` and the
 /// warnings' text.
@@ -40,22 +31,26 @@ fn a_replaced_path_lines_maxdepth_sets_the_light_path_depth() {
     for (name, key, default) in [("importancecache", "vpldepth", 4), ("irradiancecache", "maxdepth", 3)] {
         for line in ["Integrator \"path\" \"integer maxdepth\" [3]", "Integrator \"volpath\" \"integer maxdepth\" [3]"]
         {
-            let (v, w) = depth(&scene(line), name, key, &[]);
+            let (v, w) = depth(&common::lit_plane(line), name, key, &[]);
             assert_eq!(v, 2, "{name} under {line}");
             assert!(w.contains(&format!("its \"maxdepth\" gives {name}'s \"{key}\" 2")), "{w}");
             assert!(!w.contains("are not used"), "maxdepth is used: {w}");
         }
         // pbrt-v3's default maxdepth 5 when the line has none; 65 is clamped to the parameter's 64.
-        assert_eq!(depth(&scene("Integrator \"path\""), name, key, &[]).0, 4, "{name}");
-        assert_eq!(depth(&scene("Integrator \"path\" \"integer maxdepth\" [65]"), name, key, &[]).0, 64, "{name}");
+        assert_eq!(depth(&common::lit_plane("Integrator \"path\""), name, key, &[]).0, 4, "{name}");
+        assert_eq!(
+            depth(&common::lit_plane("Integrator \"path\" \"integer maxdepth\" [65]"), name, key, &[]).0,
+            64,
+            "{name}"
+        );
         // --set wins, and other parameters of the replaced line are still named unused.
         let line = "Integrator \"path\" \"integer maxdepth\" [3] \"float rrthreshold\" [0.5]";
-        let (v, w) = depth(&scene(line), name, key, &[(key, "1")]);
+        let (v, w) = depth(&common::lit_plane(line), name, key, &[(key, "1")]);
         assert_eq!(v, 1, "{name}");
         assert!(w.contains("its parameters (maxdepth, rrthreshold) are not used"), "{w}");
         // Lines that are not path-like, and no line at all, leave the default.
         let ao = "Integrator \"ambientocclusion\" \"integer nsamples\" [4]";
-        assert_eq!(depth(&scene(ao), name, key, &[]).0, default, "{name}");
-        assert_eq!(depth(&scene(""), name, key, &[]).0, default, "{name}");
+        assert_eq!(depth(&common::lit_plane(ao), name, key, &[]).0, default, "{name}");
+        assert_eq!(depth(&common::lit_plane(""), name, key, &[]).0, default, "{name}");
     }
 }

@@ -82,7 +82,7 @@ pub struct AddArgs {
     #[arg(long)]
     pub placement: Option<String>,
     /// Cache budget of a cache-based integrator.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::parse_caches)]
     pub caches: Option<usize>,
     /// Film resolution WxH.
     #[arg(long, value_parser = super::parse_resolution)]

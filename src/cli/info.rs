@@ -30,10 +30,14 @@ pub fn run(args: &InfoArgs) -> Result<String> {
     let _ = writeln!(o, "sampler     {} ({} spp)", s.sampler.name, s.sampler.spp);
     let integrator = l.integrator.as_ref().map_or("path (pbrt-v3 default)", |n| n.name.as_str());
     let name = l.integrator.as_ref().map_or("path", |n| n.name.as_str());
-    let kind = match crate::application::registry::entry(name) {
-        Some(e) => format!("cache-based: {}", e.about),
-        None if crate::render::INTEGRATORS.contains(&name) => "per-pixel".to_string(),
-        None => format!("not implemented; choose one with --integrator: {}", crate::integrator::integrator_names()),
+    let stand_in = crate::integrator::STAND_INS.iter().find(|s| s.pbrt == name);
+    let kind = match (stand_in, crate::application::registry::entry(name)) {
+        (Some(s), _) => format!("rendered by {}: {}", s.cachert, s.why),
+        (None, Some(e)) => format!("cache-based: {}", e.about),
+        (None, None) if crate::render::INTEGRATORS.contains(&name) => "per-pixel".to_string(),
+        (None, None) => {
+            format!("not implemented; choose one with --integrator: {}", crate::integrator::integrator_names())
+        }
     };
     let _ = writeln!(o, "integrator  {integrator} ({kind})");
     let world_tris: usize = s.geometry.meshes.iter().map(|m| m.triangle_count()).sum();

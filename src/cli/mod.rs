@@ -60,6 +60,16 @@ pub fn run(cli: &Cli) -> crate::Result<Done> {
     }
 }
 
+/// A cache budget from the command line: a whole number of at least 1 (a negative one reaches here, not
+/// clap's "use -- to pass -5" tip, which would make it the scene's name).
+pub fn parse_caches(s: &str) -> std::result::Result<usize, String> {
+    match s.trim().parse::<i128>() {
+        Ok(n) if n >= 1 => usize::try_from(n).map_err(|_| format!("{n} caches is more than this machine can address")),
+        Ok(n) => Err(format!("the cache budget must be at least 1, got {n}")),
+        Err(_) => Err(format!("expected a whole number of caches, got \"{s}\"")),
+    }
+}
+
 /// Parses a `--resolution WxH` value (positive integers), for clap.
 pub fn parse_resolution(s: &str) -> std::result::Result<[u32; 2], String> {
     let p = |v: &str| v.trim().parse::<u32>().ok().filter(|&v| v > 0);
@@ -74,5 +84,19 @@ pub fn parse_key_value(s: &str) -> std::result::Result<(String, String), String>
     match s.split_once('=') {
         Some((k, v)) if !k.trim().is_empty() => Ok((k.trim().to_string(), v.trim().to_string())),
         _ => Err(format!("expected KEY=VALUE, found \"{s}\"")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cache_budgets_are_whole_numbers_of_at_least_one() {
+        assert_eq!(parse_caches("700"), Ok(700));
+        assert_eq!(parse_caches(" 1 "), Ok(1));
+        assert!(parse_caches("-5").unwrap_err().contains("at least 1, got -5"));
+        assert!(parse_caches("0").unwrap_err().contains("at least 1"));
+        assert!(parse_caches("7.5").unwrap_err().contains("whole number"));
     }
 }

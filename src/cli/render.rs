@@ -47,7 +47,7 @@ pub struct RenderArgs {
     #[arg(long, value_parser = parse_placement)]
     pub placement: Option<Placement>,
     /// Cache-based integrators: the total cache budget (the parameter "caches").
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::parse_caches)]
     pub caches: Option<usize>,
     /// Cache-based renders: write the image with stage-1 caches (red) and stage-2 caches (cyan) marked.
     #[arg(long)]

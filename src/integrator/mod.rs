@@ -108,8 +108,52 @@ pub fn dry_run(
     render_pass(scene, integrator, settings, warnings, Pass::DryRun).map(|_| ())
 }
 
+/// A pbrt-v3 integrator cachert does not have, rendered by one it has whose image is the same in
+/// expectation (only the noise differs), with a warning that says so.
+#[derive(Clone, Copy, Debug)]
+pub struct StandIn {
+    /// pbrt-v3's name.
+    pub pbrt: &'static str,
+    /// The integrator that renders it; it reads the line's parameters (those it does not know are
+    /// warned about as unused).
+    pub cachert: &'static str,
+    /// Why the image is the same.
+    pub why: &'static str,
+}
+
+/// Every pbrt-v3 integrator cachert renders with another of its own (the README's table).
+pub const STAND_INS: &[StandIn] = &[
+    StandIn {
+        pbrt: "volpath",
+        cachert: "path",
+        why: "without participating media (which cachert ignores, with a warning) pbrt-v3's volpath is path",
+    },
+    StandIn {
+        pbrt: "bdpt",
+        cachert: "path",
+        why: "bidirectional path tracing with the same maxdepth converges to path's image; only the noise differs",
+    },
+    StandIn {
+        pbrt: "mlt",
+        cachert: "path",
+        why: "Metropolis light transport with the same maxdepth converges to path's image; only the noise differs",
+    },
+    StandIn {
+        pbrt: "sppm",
+        cachert: "path",
+        why: "stochastic progressive photon mapping converges to path's image as its radius shrinks; only the noise \
+              and the photon blur differ",
+    },
+    StandIn {
+        pbrt: "whitted",
+        cachert: "directlighting",
+        why: "Whitted ray tracing (every light sampled, specular reflection and transmission to maxdepth) has \
+              directlighting's image; only the noise differs",
+    },
+];
+
 /// pbrt-v3 integrators whose `maxdepth` is the length of a light path (`volpath` without media is `path`).
-const PATH_LIKE: &[&str] = &["path", "volpath", "bdpt"];
+const PATH_LIKE: &[&str] = &["path", "volpath", "bdpt", "mlt", "sppm"];
 
 /// The light-path depth a cache integrator `name` takes from the scene's path-like integrator that it
 /// replaces: its [`Application::PATH_DEPTH`](crate::application::Application::PATH_DEPTH) parameter set to
@@ -136,10 +180,14 @@ fn render_pass(
 ) -> Result<Option<RenderOutput>> {
     let empty = ParamList::default();
     let scene_name = integrator.map_or("path", |n| n.name.as_str());
-    let name = settings.integrator.as_deref().unwrap_or(scene_name);
+    let stand_in = STAND_INS.iter().find(|s| s.pbrt == scene_name && settings.integrator.is_none());
+    let name = settings.integrator.as_deref().or(stand_in.map(|s| s.cachert)).unwrap_or(scene_name);
+    if let (Some(s), Some(n)) = (stand_in, integrator) {
+        warnings.at(&n.name_loc, format!("Integrator \"{}\" is rendered by \"{}\": {}", s.pbrt, s.cachert, s.why));
+    }
     // Parameters written for another integrator do not apply to an override.
     let params = match integrator {
-        Some(n) if n.name == name => &n.params,
+        Some(n) if n.name == name || stand_in.is_some() => &n.params,
         _ => &empty,
     };
     let mut sampler = scene.sampler.clone();
@@ -150,7 +198,7 @@ fn render_pass(
         sampler.spp = spp;
     }
     let depth = inherited_depth(integrator, name, settings);
-    if let Some(n) = integrator.filter(|n| n.name != name && !n.params.is_empty()) {
+    if let Some(n) = integrator.filter(|n| n.name != name && stand_in.is_none() && !n.params.is_empty()) {
         let unused: Vec<&str> =
             n.params.iter().map(|p| p.name.as_str()).filter(|&p| depth.is_none() || p != "maxdepth").collect();
         let carried = depth.as_ref().map(|(k, v)| format!("its \"maxdepth\" gives {name}'s \"{k}\" {v}"));
@@ -183,7 +231,12 @@ fn render_pass(
     let pixel = per_pixel_integrator(name, &iparams, scene, &sampler, settings.quick, warnings)?
         .ok_or_else(|| not_implemented(name))?;
     iparams.check_overrides()?;
-    report_unused(integrator, name, &settings.set, warnings);
+    report_unused(
+        integrator,
+        integrator.filter(|_| stand_in.is_some()).map_or(name, |n| &n.name),
+        &settings.set,
+        warnings,
+    );
     if pass == Pass::DryRun {
         return Ok(None);
     }

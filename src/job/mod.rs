@@ -66,11 +66,25 @@ impl RenderJob {
     /// render and before any file is written, and every file is written atomically. The warnings are handed
     /// to `warn` once, before an error is returned.
     pub fn run(&self, warn: &mut dyn FnMut(&Warnings)) -> Result<Finished> {
+        // Every output named on the command line is checked before the scene is read, so a typo in a folder
+        // or an extension costs nothing; the Film's own file name once the scene is read.
+        let o = &self.outputs;
+        for (flag, path, image) in [
+            ("--outfile", &o.image, true),
+            ("--overlay", &o.overlay, true),
+            ("--dmap", &o.dmap, true),
+            ("--stats", &o.stats, false),
+        ] {
+            if let Some(p) = path.as_deref().filter(|p| *p != Path::new("-")) {
+                check_output(flag, p, image)?;
+            }
+        }
         let loaded = load(&self.scene, self.load)?;
         let mut warnings = loaded.warnings.clone();
-        // Settle the output name before rendering, so a bad extension fails fast.
         let image_path = self.image_path(&loaded.scene.film.filename);
-        crate::image::Format::from_path(&image_path)?;
+        if o.image.is_none() {
+            check_output("Film \"filename\"", &image_path, true)?;
+        }
         let result = render(&loaded.scene, loaded.integrator.as_ref(), &self.settings, &mut warnings);
         warn(&warnings);
         let output = result?;
@@ -181,6 +195,36 @@ impl RenderJob {
             }
         }
         a
+    }
+}
+
+/// Whether `path` can be written as the output `what` names: an image format this writer knows (`image`),
+/// a folder that exists, and one that takes a new file (checked by creating and removing an empty one).
+fn check_output(what: &str, path: &Path, image: bool) -> Result<()> {
+    if image {
+        crate::image::Format::from_path(path).map_err(|e| Error::usage(format!("{what}: {e}")))?;
+    }
+    let folder = match path.parent() {
+        Some(f) if !f.as_os_str().is_empty() => f,
+        _ => Path::new("."),
+    };
+    if !folder.is_dir() {
+        return Err(Error::usage(format!(
+            "{what} {}: the folder \"{}\" does not exist",
+            path.display(),
+            folder.display()
+        )));
+    }
+    let probe = folder.join(format!(".cachert-write-check-{}", std::process::id()));
+    match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
+        Err(e) => {
+            Err(Error::usage(format!("{what} {}: cannot write in \"{}\": {e}", path.display(), folder.display())))
+        }
     }
 }
 

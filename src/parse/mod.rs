@@ -11,6 +11,7 @@ pub mod integrator;
 mod lexer;
 pub mod params;
 mod parser;
+pub(crate) use parser::closest;
 pub mod spectrum;
 
 pub use directive::{ActiveTransform, Directive, DirectiveKind, Named};

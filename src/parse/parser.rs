@@ -425,7 +425,7 @@ fn unknown_directive(word: &str) -> String {
 
 /// The candidate nearest to `word` by edit distance (ignoring case), if it is within two edits or a third of
 /// its length.
-fn closest<'a>(word: &str, candidates: impl Iterator<Item = &'a str>) -> Option<&'a str> {
+pub(crate) fn closest<'a>(word: &str, candidates: impl Iterator<Item = &'a str>) -> Option<&'a str> {
     let lower = word.to_lowercase();
     let (dist, best) = candidates.map(|c| (edit_distance(&lower, &c.to_lowercase()), c)).min_by_key(|&(d, _)| d)?;
     (dist <= (best.len() / 3).max(2) && dist < best.len()).then_some(best)

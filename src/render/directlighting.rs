@@ -15,7 +15,7 @@ use crate::shading::bxdf::BxdfFlags;
 use crate::shading::light::LightSelect;
 
 use super::{PixelIntegrator, RayCounters};
-use crate::parse::integrator::{IntegratorParams, MAX_DEPTH, ParamDef, Parameter};
+use crate::parse::integrator::{IntegratorParams, ParamDef, Parameter};
 use crate::sampling::pixel_samples::PixelSamples;
 use crate::shading::lighting::Scratch;
 use crate::shading::lighting::{ShadePoint, Shading, sample_all_lights, sample_one_light};
@@ -36,8 +36,14 @@ pub enum Strategy {
 /// pbrt-v3).
 pub const STRATEGY: ParamDef<String> =
     ParamDef::text("strategy", "all", "`all`: every light with its nsamples; `one`: one light chosen uniformly");
-/// `maxdepth`: the specular bounces followed (`path` reads it as its bounces).
-pub const MAXDEPTH: ParamDef<i64> = ParamDef::int("maxdepth", 5, "specular bounces followed").between(0, MAX_DEPTH);
+/// `maxdepth`: the specular bounces followed (`path` reads it as its bounces). pbrt-v3 reads any `int`, so
+/// any non-negative one is accepted (the Cornell box of the shared scenes sets 65); `directlighting`
+/// follows at most [`MAX_SPECULAR_DEPTH`] of them, with a warning beyond.
+pub const MAXDEPTH: ParamDef<i64> =
+    ParamDef::int("maxdepth", 5, "specular bounces followed").between(0, i32::MAX as i64);
+
+/// Most specular bounces `directlighting` follows (each level of its recursion keeps a BSDF).
+pub const MAX_SPECULAR_DEPTH: u32 = 1024;
 
 /// The parameters of `directlighting` (the README's table).
 pub const PARAMETERS: &[Parameter] = &[STRATEGY.row, MAXDEPTH.row];
@@ -61,7 +67,14 @@ impl<'a> DirectLighting<'a> {
         quick: bool,
         warnings: &mut Warnings,
     ) -> Result<Self> {
-        let max_depth = p.get(&MAXDEPTH)? as u32;
+        let mut max_depth = p.get(&MAXDEPTH)? as u32;
+        if max_depth > MAX_SPECULAR_DEPTH {
+            warnings.general(format!(
+                "{}directlighting: \"maxdepth\" {max_depth}: following at most {MAX_SPECULAR_DEPTH} specular bounces",
+                p.at("maxdepth")
+            ));
+            max_depth = MAX_SPECULAR_DEPTH;
+        }
         let strategy = match p.get(&STRATEGY)?.as_str() {
             "all" => Strategy::All,
             "one" => Strategy::One,

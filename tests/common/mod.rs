@@ -272,3 +272,15 @@ fn assert_within_floor(name: &str, ours: &Image, reference: &Image, floor: f64, 
     assert!(err <= 1.3 * floor, "{name}: RMSE {err} is {:.2}× the noise floor {floor}", err / floor);
     assert!(dev <= mean_tol, "{name}: mean {m_ours} vs pbrt-v3's {m_theirs}");
 }
+
+/// An 8×8 view of a matte plane under a point light, with `integrator` (an `Integrator` line, or empty)
+/// before the camera: for tests of what a scene's integrator line does.
+pub fn lit_plane(integrator: &str) -> String {
+    format!(
+        "{integrator}\nLookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [30]\n\
+         Film \"image\" \"integer xresolution\" [8] \"integer yresolution\" [8]\nWorldBegin\n\
+         LightSource \"point\" \"point from\" [0 0 3] \"rgb I\" [5 5 5]\nMaterial \"matte\"\n\
+         Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-5 -5 0  5 -5 0  5 5 0  -5 5 0]\n\
+         WorldEnd\n"
+    )
+}

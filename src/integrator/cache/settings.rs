@@ -105,19 +105,25 @@ impl Placement {
     /// The name `none` that selects [`Placement::Reference`].
     pub const REFERENCE: &'static str = "none";
 
-    /// Parses a placement name; an unknown one is an error listing every valid name.
+    /// Parses a placement name, ignoring case (the paper writes `VGC+DGS`); an unknown one is an error
+    /// naming the nearest and listing every valid name.
     pub fn parse(name: &str) -> Result<Self> {
-        if name == Self::REFERENCE {
+        Self::parse_or_why(name).map_err(Error::usage)
+    }
+
+    /// [`Placement::parse`] with the reason as text, for callers that locate it (a scene parameter).
+    pub fn parse_or_why(name: &str) -> std::result::Result<Self, String> {
+        let lower = name.to_ascii_lowercase();
+        if lower == Self::REFERENCE {
             return Ok(Placement::Reference);
         }
-        match registry::NAMES.iter().find(|&&n| n == name) {
-            Some(&n) => Ok(Placement::Strategy(n)),
-            None => Err(Error::usage(format!(
-                "unknown placement \"{name}\"; expected one of: {}, {}",
-                Self::REFERENCE,
-                registry::NAMES.join(", ")
-            ))),
+        if let Some(&n) = registry::NAMES.iter().find(|&&n| n == lower) {
+            return Ok(Placement::Strategy(n));
         }
+        let all = std::iter::once(Self::REFERENCE).chain(registry::NAMES.iter().copied());
+        let near =
+            crate::parse::closest(&lower, all.clone()).map(|n| format!(" (did you mean \"{n}\"?)")).unwrap_or_default();
+        Err(format!("unknown placement \"{name}\"{near}; expected one of: {}", all.collect::<Vec<_>>().join(", ")))
     }
 
     /// The name as typed.
@@ -214,7 +220,7 @@ impl CacheSettings {
         let written = p.get(&PLACEMENT)?;
         let placement = match o.placement {
             Some(pl) => pl,
-            None => Placement::parse(&written)?,
+            None => Placement::parse_or_why(&written).map_err(|why| p.invalid(&PLACEMENT.row, why))?,
         };
         let seed = p.get_or(&SEED, seed as i64)? as u64;
         Ok(CacheSettings { placement, caches: caches as usize, params, subpixels, seed, progress, scale })

@@ -1,0 +1,106 @@
+//! What a new user meets first (issue 42), through the binary: pbrt-v3 integrators cachert renders with
+//! its own, any `maxdepth`, placement names in any case with a did-you-mean, and a negative cache budget
+//! that is a clear error rather than clap's tip.
+
+mod common;
+
+use std::process::Command;
+
+use common::TempDir;
+
+/// Runs `cachert render` on `text` (written to a file in `dir`) with `args`: exit code, stderr, and whether
+/// the image was written.
+fn render(dir: &TempDir, text: &str, args: &[&str]) -> (i32, String, bool) {
+    let file = dir.write("scene.pbrt", text);
+    let out = dir.path("out.pfm");
+    let _ = std::fs::remove_file(&out);
+    let o = Command::new(env!("CARGO_BIN_EXE_cachert"))
+        .arg("render")
+        .arg(&file)
+        .args(["--outfile", out.to_str().unwrap()])
+        .args(args)
+        .output()
+        .unwrap();
+    (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stderr).into_owned(), out.exists())
+}
+
+#[test]
+fn pbrt_v3_integrators_we_do_not_have_render_with_the_one_of_the_same_image() {
+    let dir = TempDir::new("first-hour-standins");
+    for (line, by) in [
+        ("Integrator \"volpath\" \"integer maxdepth\" [65]", "path"),
+        ("Integrator \"bdpt\" \"integer maxdepth\" [3] \"bool visualizestrategies\" \"false\"", "path"),
+        ("Integrator \"mlt\"", "path"),
+        ("Integrator \"sppm\"", "path"),
+        ("Integrator \"whitted\" \"integer maxdepth\" [3]", "directlighting"),
+    ] {
+        let (code, err, written) = render(&dir, &common::lit_plane(line), &["--spp", "1"]);
+        assert!(code == 0 && written, "{line}: {err}");
+        assert!(err.contains(&format!("is rendered by \"{by}\"")), "{line}: {err}");
+    }
+    // The stand-in reads the line's parameters: bdpt's own are unused, maxdepth is not.
+    let (_, err, _) = render(
+        &dir,
+        &common::lit_plane("Integrator \"bdpt\" \"integer maxdepth\" [3] \"bool visualizestrategies\" \"false\""),
+        &[],
+    );
+    assert!(
+        err.contains("unused parameter \"bool visualizestrategies\"") && !err.contains("\"integer maxdepth\""),
+        "{err}"
+    );
+    // pbrt-v3 reads any maxdepth: the shared Cornell box sets 65.
+    for integrator in ["path", "directlighting"] {
+        let line = format!("Integrator \"{integrator}\" \"integer maxdepth\" [65]");
+        let (code, err, _) = render(&dir, &common::lit_plane(&line), &["--spp", "1"]);
+        assert_eq!(code, 0, "{integrator}: {err}");
+    }
+}
+
+#[test]
+fn placement_names_in_any_case_and_a_did_you_mean() {
+    let dir = TempDir::new("first-hour-placement");
+    let text = common::lit_plane("");
+    let cache = ["--integrator", "cacheao", "--caches", "8", "--spp", "1"];
+    let (code, err, written) = render(&dir, &text, &[&cache[..], &["--placement", "VGC+DGS"]].concat());
+    assert!(code == 0 && written, "{err}");
+    let (code, err, written) = render(&dir, &text, &[&cache[..], &["--placement", "vgc+dsg"]].concat());
+    assert!(code == 2 && !written, "{err}");
+    assert!(err.contains("did you mean \"vgc+dgs\"?"), "{err}");
+    // In a scene file the error is located.
+    let located =
+        common::lit_plane("Integrator \"cacheao\" \"integer caches\" [8]\n  \"string placement\" \"vgc+dsg\"");
+    let (code, err, written) = render(&dir, &located, &["--spp", "1"]);
+    assert!(code == 2 && !written, "{err}");
+    assert!(err.contains("scene.pbrt:2:3:") && err.contains("did you mean \"vgc+dgs\"?"), "{err}");
+}
+
+#[test]
+fn a_negative_cache_budget_is_a_clear_error() {
+    let dir = TempDir::new("first-hour-caches");
+    let (code, err, written) = render(&dir, &common::lit_plane(""), &["--integrator", "cacheao", "--caches", "-5"]);
+    assert!(code == 2 && !written, "{err}");
+    assert!(err.contains("at least 1, got -5") && !err.contains("-- -5"), "{err}");
+}
+
+#[test]
+fn a_bad_output_is_found_before_the_scene_is_read() {
+    let dir = TempDir::new("first-hour-outputs");
+    // The scene does not exist: the output's error comes first, so nothing was read or rendered.
+    let missing_scene = dir.path("no-such-scene.pbrt");
+    let run = |args: &[&str]| {
+        let o =
+            Command::new(env!("CARGO_BIN_EXE_cachert")).arg("render").arg(&missing_scene).args(args).output().unwrap();
+        (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let nowhere = dir.path("no-such-folder/out.exr");
+    let (code, err) = run(&["--outfile", nowhere.to_str().unwrap()]);
+    assert!(code == 2 && err.contains("--outfile") && err.contains("does not exist"), "{err}");
+    let (code, err) = run(&["--outfile", dir.path("out.jpg").to_str().unwrap()]);
+    assert!(code == 2 && err.contains("--outfile") && err.contains("extension"), "{err}");
+    let (code, err) = run(&["--outfile", dir.path("out.exr").to_str().unwrap(), "--stats", nowhere.to_str().unwrap()]);
+    assert!(code == 2 && err.contains("--stats"), "{err}");
+    // A good output name gets as far as the scene.
+    let (code, err) = run(&["--outfile", dir.path("out.exr").to_str().unwrap()]);
+    assert!(code == 2 && err.contains("no-such-scene.pbrt"), "{err}");
+    assert_eq!(dir.entries(), Vec::<String>::new(), "nothing written, no probe left");
+}
