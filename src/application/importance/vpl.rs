@@ -12,14 +12,19 @@
 //! I_j(x) = E_j(−ω) · f_x(ω_o, ω) · |cos θ_x| / max(d², d_c²) · V(x, y_j),
 //!
 //! where ω is the unit direction from x to the VPL and E_j what the VPL sends toward x: for a surface VPL
-//! β·f_j(−ω, ω_in)·|cos θ_j|, for a point on an area light Le·|cos θ_j|, for a point light its intensity;
-//! a distant or infinite light's emission VPL is a direction (no distance, no clamp). The clamp d_c is the
-//! same for the estimator and the reference.
+//! β·f_j(−ω, ω_in)·|ω_in·n_s| / |ω_in·n_g| · |cos θ_j| with θ_j about the geometric normal, for a point on
+//! an area light Le·|cos θ_j|, for a point light its intensity; a distant or infinite light's emission VPL
+//! is a direction (no distance, no clamp). The clamp d_c is the same for the estimator and the reference;
+//! the light it removes is put back by `compensation` (each VPL records its depth for it).
 //!
-//! VPLs on Lambertian surfaces (the most common) store their diffuse radiance factor β·R/π and emit like
-//! a cosine emitter; other surface VPLs keep their BSDF in a side table, so the list the per-sample
-//! reference walks stays small. Light tracing uses the radiance BSDFs (the adjoint correction for shading
-//! normals and refraction is left out; estimator and reference share the same VPLs either way).
+//! Light paths carry importance: at a vertex with shading normals the throughput takes the adjoint BSDF,
+//! f · |ω_in·n_s| · |ω_out·n_g| / (|ω_in·n_g| · pdf), and a VPL's light toward x the same factor (pbrt-v3's
+//! `CorrectShadingNormal`); the radiance BSDF made the buddha fractal's one-bounce light 5 % too bright.
+//! (Across refraction the throughput keeps the radiance BSDF's (η_i/η_t)² scaling, which the adjoint has
+//! not; it cancels through a slab of glass, not where a path starts or ends inside one.) VPLs on Lambertian
+//! surfaces (the most common) store their diffuse radiance factor β·R/π, with that factor, and emit like a
+//! cosine emitter; other surface VPLs keep their BSDF in a side table, so the list the per-sample reference
+//! walks stays small.
 //!
 //! Depends on `scene`, `shading` and `shading::lighting` (the prepared shading data); never on placement.
 
