@@ -335,13 +335,9 @@ fn absurd_resolution_is_refused_before_allocating() {
     let text =
         "Film \"image\"\n  \"integer xresolution\" [2000000] \"integer yresolution\" [2000000]\nWorldBegin\nWorldEnd\n";
     let (got, path) = load_error(&dir, "scene.pbrt", text);
-    assert_eq!(
-        got,
-        format!(
-            "{}:1:6: film resolution 2000000x2000000 would need 174.6 TiB of memory; the limit is 16.0 GiB",
-            path.display()
-        )
-    );
+    // The limit is the memory available (machine-dependent), so only the start is fixed.
+    let start = format!("{}:1:6: film resolution 2000000x2000000 would need 174.6 TiB of memory; ", path.display());
+    assert!(got.starts_with(&start) && got.ends_with("is available"), "{got}");
     let text = "Film \"image\" \"integer xresolution\" [10000000000]\nWorldBegin\nWorldEnd\n";
     let (got, path) = load_error(&dir, "overflow.pbrt", text);
     assert_eq!(got, format!("{}:1:14: xresolution 10000000000 is too large", path.display()));

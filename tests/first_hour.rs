@@ -104,3 +104,17 @@ fn a_bad_output_is_found_before_the_scene_is_read() {
     assert!(code == 2 && err.contains("no-such-scene.pbrt"), "{err}");
     assert_eq!(dir.entries(), Vec::<String>::new(), "nothing written, no probe left");
 }
+
+#[test]
+fn a_resolution_too_large_for_this_machine_blames_the_flag() {
+    let dir = TempDir::new("first-hour-resolution");
+    let (code, err, written) = render(&dir, &common::lit_plane(""), &["--resolution", "3000000x3000000"]);
+    assert!(code == 2 && !written, "{err}");
+    assert!(err.contains("--resolution 3000000x3000000: film resolution") && err.contains("is available"), "{err}");
+    assert!(!err.contains("scene.pbrt:"), "the Film line is not at fault: {err}");
+    // A scene whose own Film is too large renders at a --resolution that fits.
+    let huge =
+        common::lit_plane("").replace("[8] \"integer yresolution\" [8]", "[3000000] \"integer yresolution\" [3000000]");
+    let (code, err, written) = render(&dir, &huge, &["--resolution", "8x8", "--spp", "1"]);
+    assert!(code == 0 && written, "{err}");
+}

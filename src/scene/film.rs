@@ -39,8 +39,14 @@ impl Default for FilmSpec {
 /// Bytes of memory per film pixel that a render needs (accumulation buffers plus the output image).
 pub const BYTES_PER_PIXEL: u64 = 48;
 
-/// Largest film memory cachert agrees to allocate.
+/// Largest film memory cachert agrees to allocate where the machine's available memory is unknown.
 pub const MAX_FILM_BYTES: u64 = 16 << 30;
+
+/// The most film memory cachert agrees to allocate: the memory available now (`MemAvailable`), or
+/// [`MAX_FILM_BYTES`] where that is unknown.
+pub fn film_memory_limit() -> u64 {
+    crate::os::available_memory_bytes().unwrap_or(MAX_FILM_BYTES)
+}
 
 /// Half-open integer pixel bounds [x0, x1) × [y0, y1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -65,7 +71,8 @@ impl PixelBounds {
 }
 
 impl FilmSpec {
-    /// Reads a `Film` directive. Refuses zero, negative or absurd resolutions before anything is allocated.
+    /// Reads a `Film` directive. Refuses zero, negative or absurd resolutions before anything is allocated
+    /// (whether the film fits in memory is the scene builder's check: a `--resolution` may replace it).
     pub fn from_directive(d: &Named) -> Result<FilmSpec> {
         if d.name != "image" {
             return Err(Error::at(&d.name_loc, format!("unknown film \"{}\"; pbrt-v3 has only \"image\"", d.name)));
@@ -77,7 +84,6 @@ impl FilmSpec {
         let y = p.int_or("yresolution", 720)?;
         f.resolution =
             [check_res(x, &loc("xresolution"), "xresolution")?, check_res(y, &loc("yresolution"), "yresolution")?];
-        check_memory(f.resolution, &d.name_loc)?;
         if let Some(cw) = p.floats("cropwindow")? {
             if cw.len() != 4 || cw.iter().any(|v| !v.is_finite()) {
                 return Err(Error::at(
@@ -122,22 +128,25 @@ fn check_res(v: i64, loc: &SourceLoc, name: &str) -> Result<u32> {
     u32::try_from(v).map_err(|_| Error::at(loc, format!("{name} {v} is too large")))
 }
 
-/// Refuses a film whose buffers would need more than [`MAX_FILM_BYTES`], saying how much it would need.
-pub fn check_memory(res: [u32; 2], loc: &SourceLoc) -> Result<()> {
+/// Why a film of `res` pixels cannot be rendered here: its buffers would need more than
+/// [`film_memory_limit`] (`None` when they fit).
+pub fn memory_problem(res: [u32; 2]) -> Option<String> {
     let bytes = res[0] as u64 * res[1] as u64 * BYTES_PER_PIXEL;
-    if bytes > MAX_FILM_BYTES {
-        return Err(Error::at(
-            loc,
-            format!(
-                "film resolution {}x{} would need {} of memory; the limit is {}",
-                res[0],
-                res[1],
-                human_bytes(bytes),
-                human_bytes(MAX_FILM_BYTES)
-            ),
-        ));
-    }
-    Ok(())
+    let limit = film_memory_limit();
+    (bytes > limit).then(|| {
+        format!(
+            "film resolution {}x{} would need {} of memory; {} is available",
+            res[0],
+            res[1],
+            human_bytes(bytes),
+            human_bytes(limit)
+        )
+    })
+}
+
+/// [`memory_problem`] as an error at the Film directive `loc`.
+pub fn check_memory(res: [u32; 2], loc: &SourceLoc) -> Result<()> {
+    memory_problem(res).map_or(Ok(()), |m| Err(Error::at(loc, m)))
 }
 
 /// Formats a byte count with a binary unit (`1.5 GiB`).

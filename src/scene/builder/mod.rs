@@ -266,8 +266,10 @@ impl SceneBuilder {
 
     fn finish(mut self, source: &Path, stats: &mut LoadStats) -> Result<LoadedScene> {
         if let Some(r) = self.opts.resolution {
-            let loc = self.film_loc.clone().unwrap_or_else(|| SourceLoc::new(source.into(), 1, 1));
-            crate::scene::film::check_memory(r, &loc)?;
+            // The flag's resolution replaces the Film's: a size too large is the flag's error, not the file's.
+            if let Some(m) = crate::scene::film::memory_problem(r) {
+                return Err(Error::usage(format!("--resolution {}x{}: {m}", r[0], r[1])));
+            }
             self.film.resolution = r;
         }
         let camera = match self.camera.take() {

@@ -23,7 +23,10 @@ impl SceneBuilder {
         if self.opts.quick {
             film.resolution = film.resolution.map(|r| (r / 4).max(1));
         }
-        check_memory(film.resolution, loc)?;
+        // A resolution given with the load options replaces this one and is checked instead.
+        if self.opts.resolution.is_none() {
+            check_memory(film.resolution, &n.name_loc)?;
+        }
         self.report_unused(&n.params, "Film");
         self.film = film;
         self.film_loc = Some(loc.clone());
