@@ -122,44 +122,91 @@ fn caret_excerpt(line: &str, col: usize) -> String {
     format!("  {prefix}{shown}{suffix}\n  {}^", " ".repeat(caret_at))
 }
 
-/// A problem that does not stop the run (an unused parameter, a missing texture, an unsupported feature).
+/// How much a [`Warning`] matters to the image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Severity {
+    /// A routine fact about how the scene is rendered that leaves the image the user asked for as it is
+    /// (a Sampler a cache-based integrator does not read, an `Integrator` line replaced on purpose by
+    /// `--integrator`); printed as `note:`.
+    Note,
+    /// Something that changes the image against what the scene or the flags ask for (an unused parameter,
+    /// a missing texture, an unsupported feature); printed as `warning:`.
+    Warning,
+}
+
+/// A problem that does not stop the run (an unused parameter, a missing texture, an unsupported feature),
+/// or a note about how the scene is rendered.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Warning {
     /// Where it comes from, when it comes from a scene file.
     pub loc: Option<SourceLoc>,
     /// What was found and what cachert does about it.
     pub msg: String,
+    /// `note:` or `warning:`.
+    pub severity: Severity,
+}
+
+impl Warning {
+    /// Whether this is a note, not a warning.
+    pub fn is_note(&self) -> bool {
+        self.severity == Severity::Note
+    }
 }
 
 impl fmt::Display for Warning {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let word = match self.severity {
+            Severity::Note => "note",
+            Severity::Warning => "warning",
+        };
         match &self.loc {
-            Some(loc) => write!(f, "{loc}: warning: {}", self.msg),
-            None => write!(f, "warning: {}", self.msg),
+            Some(loc) => write!(f, "{loc}: {word}: {}", self.msg),
+            None => write!(f, "{word}: {}", self.msg),
         }
     }
 }
 
-/// An ordered collection of warnings; an identical warning is kept once.
+/// An ordered collection of warnings and notes; an identical one is kept once. A collection made with
+/// [`Warnings::printing`] also hands each new one to its sink the moment it is recorded, so a command line
+/// shows them as they are found, before a long render rather than after it.
 #[derive(Clone, Debug, Default)]
 pub struct Warnings {
     list: Vec<Warning>,
+    sink: Option<fn(&Warning)>,
 }
 
 impl Warnings {
+    /// An empty collection that calls `sink` with each warning or note as it is first recorded.
+    pub fn printing(sink: fn(&Warning)) -> Self {
+        Warnings { list: Vec::new(), sink: Some(sink) }
+    }
+
     /// Records a warning at `loc`.
     pub fn at(&mut self, loc: &SourceLoc, msg: impl Into<String>) {
-        self.push(Warning { loc: Some(loc.clone()), msg: msg.into() });
+        self.push(Warning { loc: Some(loc.clone()), msg: msg.into(), severity: Severity::Warning });
     }
 
     /// Records a warning without a location.
     pub fn general(&mut self, msg: impl Into<String>) {
-        self.push(Warning { loc: None, msg: msg.into() });
+        self.push(Warning { loc: None, msg: msg.into(), severity: Severity::Warning });
+    }
+
+    /// Records a note at `loc` (a routine fact that leaves the image as asked for).
+    pub fn note_at(&mut self, loc: &SourceLoc, msg: impl Into<String>) {
+        self.push(Warning { loc: Some(loc.clone()), msg: msg.into(), severity: Severity::Note });
+    }
+
+    /// Records a note without a location.
+    pub fn note(&mut self, msg: impl Into<String>) {
+        self.push(Warning { loc: None, msg: msg.into(), severity: Severity::Note });
     }
 
     /// Records `w` unless the same warning is already there.
     pub fn push(&mut self, w: Warning) {
         if !self.list.contains(&w) {
+            if let Some(sink) = self.sink {
+                sink(&w);
+            }
             self.list.push(w);
         }
     }
@@ -171,12 +218,12 @@ impl Warnings {
         }
     }
 
-    /// The warnings in the order they were recorded.
+    /// The warnings and notes in the order they were recorded.
     pub fn iter(&self) -> impl Iterator<Item = &Warning> {
         self.list.iter()
     }
 
-    /// How many distinct warnings there are.
+    /// How many distinct warnings and notes there are.
     pub fn len(&self) -> usize {
         self.list.len()
     }
@@ -220,5 +267,29 @@ mod tests {
         w.general("a");
         w.general("b");
         assert_eq!(w.len(), 2);
+    }
+
+    #[test]
+    fn notes_and_warnings_say_which_they_are() {
+        let mut w = Warnings::default();
+        w.note("a");
+        w.general("a");
+        let shown: Vec<String> = w.iter().map(|w| w.to_string()).collect();
+        assert_eq!(shown, ["note: a", "warning: a"]);
+    }
+
+    #[test]
+    fn a_printing_collection_hands_each_new_warning_over_once() {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        static SEEN: AtomicUsize = AtomicUsize::new(0);
+        let mut w = Warnings::printing(|_| {
+            SEEN.fetch_add(1, Ordering::Relaxed);
+        });
+        w.general("a");
+        w.general("a");
+        let mut later = Warnings::default();
+        later.note("b");
+        w.extend(later);
+        assert_eq!(SEEN.load(Ordering::Relaxed), 2);
     }
 }

@@ -1,6 +1,7 @@
 //! What a new user meets first (issue 42), through the binary: pbrt-v3 integrators cachert renders with
 //! its own, any `maxdepth`, placement names in any case with a did-you-mean, and a negative cache budget
-//! that is a clear error rather than clap's tip.
+//! that is a clear error rather than clap's tip, misspelt parameters named with their nearest, warnings printed
+//! before the render, and routine facts as notes.
 
 mod common;
 
@@ -117,4 +118,40 @@ fn a_resolution_too_large_for_this_machine_blames_the_flag() {
         common::lit_plane("").replace("[8] \"integer yresolution\" [8]", "[3000000] \"integer yresolution\" [3000000]");
     let (code, err, written) = render(&dir, &huge, &["--resolution", "8x8", "--spp", "1"]);
     assert!(code == 0 && written, "{err}");
+}
+
+#[test]
+fn a_misspelt_parameter_is_named_with_its_nearest_before_the_render() {
+    let dir = TempDir::new("first-hour-typo");
+    let text = common::lit_plane("Integrator \"directlighting\" \"integer maxdeth\" [3]")
+        .replace("Material \"matte\"", "Material \"matte\"\nShape \"sphere\" \"float radus\" [0.5]");
+    let (code, err, written) = render(&dir, &text, &["--spp", "1"]);
+    assert!(code == 0 && written, "{err}");
+    assert!(err.contains("warning: Shape: unused parameter \"float radus\" (did you mean \"radius\"?)"), "{err}");
+    assert!(
+        err.contains("warning: Integrator: unused parameter \"integer maxdeth\" (did you mean \"maxdepth\"?)"),
+        "{err}"
+    );
+    // The scene's warnings come out before a failure later on: here the Film's own file name, checked once
+    // the scene is read, names a folder that does not exist.
+    let text = text.replace("Film \"image\"", "Film \"image\" \"string filename\" \"no-such-folder/a.exr\"");
+    let file = dir.write("film.pbrt", text);
+    let o = Command::new(env!("CARGO_BIN_EXE_cachert")).arg("render").arg(&file).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    let (warning, error) = (err.find("did you mean \"radius\""), err.find("error:"));
+    assert!(o.status.code() == Some(2) && warning.is_some() && warning < error, "{err}");
+}
+
+#[test]
+fn routine_facts_are_notes_and_image_changes_are_warnings() {
+    let dir = TempDir::new("first-hour-notes");
+    let text = common::lit_plane("Sampler \"halton\"\nIntegrator \"path\" \"integer maxdepth\" [3]")
+        .replace("WorldBegin", "WorldBegin\nMakeNamedMedium \"fog\" \"string type\" \"homogeneous\"");
+    let (code, err, _) = render(&dir, &text, &["--integrator", "cacheao", "--caches", "8", "--set", "gather=4"]);
+    assert_eq!(code, 0, "{err}");
+    let lines: Vec<&str> = err.lines().collect();
+    let kind = |what: &str| lines.iter().find(|l| l.contains(what)).map(|l| l.contains(": note: "));
+    assert_eq!(kind("Sampler \"halton\" is not used"), Some(true), "{err}");
+    assert_eq!(kind("is replaced by --integrator cacheao"), Some(true), "{err}");
+    assert_eq!(kind("participating media"), Some(false), "a warning: {err}");
 }

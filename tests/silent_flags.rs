@@ -59,12 +59,17 @@ fn spp_is_named_when_subpixels_wins() {
 fn the_scene_sampler_and_filter_are_named_with_their_lines() {
     let options = "Sampler \"halton\" \"integer pixelsamples\" 8\nPixelFilter \"gaussian\"";
     let (_, warnings) = run(&scene(options, ""), cache(&[CACHES]));
+    // Two routine facts, one note, at the Sampler's line and naming the PixelFilter's.
+    let facts: Vec<_> = warnings.iter().filter(|w| w.contains("not used by cache-based integrators")).collect();
+    assert_eq!(facts.len(), 1, "{warnings:#?}");
     assert!(
-        warnings.iter().any(|w| w.starts_with("flags.pbrt:4:") && w.contains("Sampler \"halton\" is not used")),
+        facts[0].starts_with("flags.pbrt:4:")
+            && facts[0].contains(": note: Sampler \"halton\" and PixelFilter (line 5) are not used"),
         "{warnings:#?}"
     );
+    let (_, warnings) = run(&scene("PixelFilter \"gaussian\"", ""), cache(&[CACHES]));
     assert!(
-        warnings.iter().any(|w| w.starts_with("flags.pbrt:5:") && w.contains("PixelFilter is not used")),
+        warnings.iter().any(|w| w.starts_with("flags.pbrt:4:") && w.contains(": note: PixelFilter is not used")),
         "{warnings:#?}"
     );
     // A box filter of radius 0.5 is what the cache driver does anyway: nothing to say.

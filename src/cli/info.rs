@@ -86,7 +86,9 @@ pub fn run(args: &InfoArgs) -> Result<String> {
         "time        parse {:.3} s | scene build {:.3} s | BVH build {:.3} s",
         st.parse_secs, st.build_secs, st.bvh_secs
     );
-    let _ = writeln!(o, "warnings    {}", l.warnings.len());
+    let notes = l.warnings.iter().filter(|w| w.is_note()).count();
+    let and_notes = if notes > 0 { format!(" (and {notes} notes)") } else { String::new() };
+    let _ = writeln!(o, "warnings    {}{and_notes}", l.warnings.len() - notes);
     for w in l.warnings.iter() {
         let _ = writeln!(o, "  {w}");
     }

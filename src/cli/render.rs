@@ -68,13 +68,11 @@ fn parse_placement(s: &str) -> std::result::Result<Placement, String> {
     Placement::parse(s.trim()).map_err(|e| e.to_string())
 }
 
-/// Runs `cachert render`; returns the summary to print (empty with --quiet) and the warnings, already printed.
+/// Runs `cachert render`, printing each warning and note to stderr as it is found (the scene's before the
+/// first pixel); returns the summary to print (empty with --quiet).
 pub fn run(args: &RenderArgs) -> Result<String> {
-    let finished = job(args).run(&mut |w| {
-        for w in w.iter() {
-            eprintln!("{w}");
-        }
-    })?;
+    let mut warnings = crate::error::Warnings::printing(|w| eprintln!("{w}"));
+    let finished = job(args).run(&mut warnings)?;
     Ok(if args.quiet { String::new() } else { finished.summary() })
 }
 

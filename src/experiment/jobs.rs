@@ -170,15 +170,12 @@ fn run_one(job: &Job, out: &Path, threads: Option<usize>) -> std::result::Result
     let result = if job.baseline.is_some() {
         super::per_pixel::run(job, out, threads)
     } else {
-        render_job(job, out, threads)
-            .and_then(|j| {
-                j.run(&mut |w| {
-                    for w in w.iter() {
-                        let _ = writeln!(log, "{w}");
-                    }
-                })
-            })
-            .map(|_| ())
+        let mut warnings = crate::error::Warnings::default();
+        let result = render_job(job, out, threads).and_then(|j| j.run(&mut warnings)).map(|_| ());
+        for w in warnings.iter() {
+            let _ = writeln!(log, "{w}");
+        }
+        result
     };
     let result = result.map_err(|e| e.to_string());
     if let Err(e) = &result {

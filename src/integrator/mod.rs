@@ -109,7 +109,7 @@ pub fn dry_run(
 }
 
 /// A pbrt-v3 integrator cachert does not have, rendered by one it has whose image is the same in
-/// expectation (only the noise differs), with a warning that says so.
+/// expectation (only the noise differs), with a note that says so.
 #[derive(Clone, Copy, Debug)]
 pub struct StandIn {
     /// pbrt-v3's name.
@@ -183,7 +183,7 @@ fn render_pass(
     let stand_in = STAND_INS.iter().find(|s| s.pbrt == scene_name && settings.integrator.is_none());
     let name = settings.integrator.as_deref().or(stand_in.map(|s| s.cachert)).unwrap_or(scene_name);
     if let (Some(s), Some(n)) = (stand_in, integrator) {
-        warnings.at(&n.name_loc, format!("Integrator \"{}\" is rendered by \"{}\": {}", s.pbrt, s.cachert, s.why));
+        warnings.note_at(&n.name_loc, format!("Integrator \"{}\" is rendered by \"{}\": {}", s.pbrt, s.cachert, s.why));
     }
     // Parameters written for another integrator do not apply to an override.
     let params = match integrator {
@@ -204,7 +204,7 @@ fn render_pass(
         let carried = depth.as_ref().map(|(k, v)| format!("its \"maxdepth\" gives {name}'s \"{k}\" {v}"));
         let unused = (!unused.is_empty()).then(|| format!("its parameters ({}) are not used", unused.join(", ")));
         let what = carried.into_iter().chain(unused).collect::<Vec<_>>().join("; ");
-        warnings.at(&n.name_loc, format!("Integrator \"{}\" is replaced by --integrator {name}; {what}", n.name));
+        warnings.note_at(&n.name_loc, format!("Integrator \"{}\" is replaced by --integrator {name}; {what}", n.name));
     }
     let with_depth;
     let settings = match depth {

@@ -63,9 +63,10 @@ impl RenderJob {
     }
 
     /// Renders and writes every output, all or nothing: each requested output is checked before the
-    /// render and before any file is written, and every file is written atomically. The warnings are handed
-    /// to `warn` once, before an error is returned.
-    pub fn run(&self, warn: &mut dyn FnMut(&Warnings)) -> Result<Finished> {
+    /// render and before any file is written, and every file is written atomically. The warnings of loading
+    /// go to `warnings` before the first pixel is rendered, the integrator's as it finds them (a collection
+    /// made with [`Warnings::printing`] shows them at once), whether or not the render succeeds.
+    pub fn run(&self, warnings: &mut Warnings) -> Result<Finished> {
         // Every output named on the command line is checked before the scene is read, so a typo in a folder
         // or an extension costs nothing; the Film's own file name once the scene is read.
         let o = &self.outputs;
@@ -80,14 +81,12 @@ impl RenderJob {
             }
         }
         let loaded = load(&self.scene, self.load)?;
-        let mut warnings = loaded.warnings.clone();
+        warnings.extend(loaded.warnings);
         let image_path = self.image_path(&loaded.scene.film.filename);
         if o.image.is_none() {
             check_output("Film \"filename\"", &image_path, true)?;
         }
-        let result = render(&loaded.scene, loaded.integrator.as_ref(), &self.settings, &mut warnings);
-        warn(&warnings);
-        let output = result?;
+        let output = render(&loaded.scene, loaded.integrator.as_ref(), &self.settings, warnings)?;
         self.write(&output, &image_path)?;
         Ok(Finished { image_path, output, load: loaded.stats })
     }

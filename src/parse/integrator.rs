@@ -472,7 +472,7 @@ pub fn report_unused(integrator: Option<&Named>, name: &str, set: &[(String, Str
                     "Integrator: \"pixelbounds\" is not supported; the whole film is rendered (Film \"cropwindow\" restricts it)",
                 );
             } else if !set.iter().any(|(k, _)| *k == p.name) {
-                warnings.at(&p.loc, format!("Integrator: unused parameter \"{} {}\"", p.ty.word(), p.name));
+                warnings.at(&p.loc, n.params.unused_message("Integrator", p));
             }
         }
     }

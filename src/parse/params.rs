@@ -5,7 +5,7 @@
 //! marks the parameter as used, so after a directive is handled [`ParamList::unused`] names the parameters
 //! nobody read (pbrt-v3 warns about those too). Knows nothing about rendering.
 
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 
 use crate::error::{Error, Result, SourceLoc};
 use crate::parse::spectrum;
@@ -178,6 +178,8 @@ pub enum TexOr<T> {
 #[derive(Debug, Default)]
 pub struct ParamList {
     params: Vec<Param>,
+    /// The names looked up and not found: what an unused parameter may have been meant to be.
+    missed: RefCell<Vec<Box<str>>>,
 }
 
 impl ParamList {
@@ -192,7 +194,7 @@ impl ParamList {
         }
         let mut k = keep.into_iter();
         params.retain(|_| k.next().unwrap_or(true));
-        ParamList { params }
+        ParamList { params, missed: RefCell::default() }
     }
 
     /// All parameters, in file order.
@@ -207,9 +209,25 @@ impl ParamList {
 
     /// The parameter called `name`, marked as used.
     pub fn get(&self, name: &str) -> Option<&Param> {
-        let p = self.params.iter().find(|p| p.name == name)?;
+        let Some(p) = self.params.iter().find(|p| p.name == name) else {
+            let mut missed = self.missed.borrow_mut();
+            if !missed.iter().any(|m| &**m == name) {
+                missed.push(name.into());
+            }
+            return None;
+        };
         p.used.set(true);
         Some(p)
+    }
+
+    /// The warning for an unused parameter `p` of `directive`, with the nearest name a lookup asked for
+    /// and did not find (`"float radus"`: did you mean "radius"?).
+    pub fn unused_message(&self, directive: &str, p: &Param) -> String {
+        let missed = self.missed.borrow();
+        let hint = crate::parse::closest(&p.name, missed.iter().map(|m| &**m))
+            .map(|m| format!(" (did you mean \"{m}\"?)"))
+            .unwrap_or_default();
+        format!("{directive}: unused parameter \"{} {}\"{hint}", p.ty.word(), p.name)
     }
 
     /// The location of parameter `name`, if present (does not mark it used).

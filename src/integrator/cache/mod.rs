@@ -194,7 +194,7 @@ pub fn help() -> String {
 /// The sample settings a cache-based render honours and the ones it cannot, said aloud: `--spp` (and
 /// `--quick`'s one sample per pixel) become the sub-pixel sample count unless `subpixels` is set; the scene's
 /// Sampler and PixelFilter are not used (the driver shades `subpixels` jittered positions per pixel and
-/// averages them), each with a warning where it was written. (The Film's `scale` and `maxsampleluminance`
+/// averages them), said in one note at the first of the two lines that declares them. (The Film's `scale` and `maxsampleluminance`
 /// are honoured: [`render_with`].) Returns `settings.cache` with the honoured sub-pixel count added.
 fn cache_sample_settings(
     scene: &Scene,
@@ -213,19 +213,25 @@ fn cache_sample_settings(
         Some((n, _)) => o.subpixels = Some(n),
         None => {}
     }
-    let per_pixel = "it shades \"subpixels\" jittered positions per pixel (set it, or --spp)";
     // A per-pixel term renders with the scene's Sampler and PixelFilter: only the cached part leaves them
-    // out.
+    // out. Both facts are one note, at the first of the two lines.
     if !per_pixel_term {
-        if let Some(loc) = &scene.declared.sampler {
-            let name = &scene.sampler.name;
-            warnings.at(loc, format!("Sampler \"{name}\" is not used by cache-based integrators: {per_pixel}"));
-        }
         let box_filter = scene.filter.kind == filter::FilterKind::Box && scene.filter.radius == [0.5, 0.5];
-        if let Some(loc) = scene.declared.filter.as_ref().filter(|_| !box_filter) {
-            warnings.at(
+        let sampler = scene.declared.sampler.as_ref().map(|l| (l, format!("Sampler \"{}\"", scene.sampler.name)));
+        let filter = scene.declared.filter.as_ref().filter(|_| !box_filter);
+        let unused = match (sampler, filter) {
+            (Some((l, s)), Some(f)) => Some((l, format!("{s} and PixelFilter (line {}) are", f.line))),
+            (Some((l, s)), None) => Some((l, format!("{s} is"))),
+            (None, Some(f)) => Some((f, "PixelFilter is".to_string())),
+            (None, None) => None,
+        };
+        if let Some((loc, what)) = unused {
+            warnings.note_at(
                 loc,
-                "PixelFilter is not used by cache-based integrators: the sub-pixel samples of a pixel are averaged (a box filter of radius 0.5)",
+                format!(
+                    "{what} not used by cache-based integrators: they shade \"subpixels\" jittered positions per \
+                     pixel (set it, or --spp) and average them (a box filter of radius 0.5)"
+                ),
             );
         }
     }

@@ -237,7 +237,7 @@ impl SceneBuilder {
     /// Reports the parameters no lookup read as warnings at their own location.
     fn report_unused(&mut self, params: &ParamList, directive: &str) {
         for p in params.unused() {
-            self.warnings.at(&p.loc, format!("{directive}: unused parameter \"{} {}\"", p.ty.word(), p.name));
+            self.warnings.at(&p.loc, params.unused_message(directive, p));
         }
     }
 
