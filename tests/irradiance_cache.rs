@@ -43,6 +43,8 @@ fn run(scene: &str, set: &[(&str, &str)]) -> cachert::Result<RenderOutput> {
 }
 
 /// Renders a loaded scene with `integrator` instead of the scene's (when given) and `--set` pairs `set`.
+/// The closed forms here are of the indirect light, so `output indirect` is set unless `set` or the scene's
+/// Integrator line names an `output` (the default image is `full`).
 fn render_loaded(
     loaded: &LoadedScene,
     integrator: Option<&str>,
@@ -50,9 +52,14 @@ fn render_loaded(
     threads: Option<usize>,
     w: &mut Warnings,
 ) -> cachert::Result<RenderOutput> {
+    let line = loaded.integrator.as_ref();
+    let name = integrator.or(line.map(|n| n.name.as_str()));
+    let scene_sets_output = integrator.is_none() && line.is_some_and(|n| n.params.loc_of("output").is_some());
+    let output = (name == Some("irradiancecache") && !scene_sets_output && !set.iter().any(|(k, _)| *k == "output"))
+        .then_some(("output", "indirect"));
     let settings = RenderSettings {
         integrator: integrator.map(str::to_string),
-        set: set.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
+        set: output.into_iter().chain(set.iter().copied()).map(|(k, v)| (k.to_string(), v.to_string())).collect(),
         threads,
         seed: 7,
         ..Default::default()
