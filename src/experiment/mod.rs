@@ -28,6 +28,7 @@ pub mod spec;
 pub mod summary;
 pub mod tables;
 pub mod ticks;
+pub mod wins;
 
 /// The part of stored reference file names that depends on the sweep's `--set` parameters (empty without
 /// any), so a reference made with other parameters (say another `maxdistance`) is never reused. The cache
