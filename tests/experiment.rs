@@ -161,3 +161,65 @@ fn replot_refuses_a_bad_results_file_with_its_line_and_column_and_writes_nothing
     assert!(err.contains("results.csv:2:36: expected flip (a number), found \"zero\""), "{err}");
     assert_eq!(dir.entries(), ["results.csv"], "nothing drawn");
 }
+
+#[test]
+fn replot_of_a_spec_sweep_draws_one_line_per_application_and_method() {
+    // Issue 42: a results folder of a sweep over three applications (each with its own budgets), with a
+    // second reference for one of them (a varied parameter of the estimator). Each application gets its
+    // own charts with one line per method; the per-pixel runs of the other reference get a chart of
+    // their own instead of joining the first reference's line.
+    let dir = common::TempDir::new("replot-sweep");
+    let mut csv =
+        String::from("id,status,scene,application,placement,method,samples,caches,seed,varied,set,rmse,flip,total_s\n");
+    let apps = [
+        ("cacheao", [10, 20], "", "gather"),
+        ("irradiancecache", [30, 60], "gather=16", "gather"),
+        ("importancecache", [100, 200], "vpls=64", "draws"),
+    ];
+    for (app, budgets, set, count) in apps {
+        let extra = if app == "importancecache" { "sampling=power;" } else { "" };
+        let base = set.split(';').filter(|p| !p.is_empty() && !p.starts_with("gather=")).collect::<Vec<_>>();
+        let prefix = if base.is_empty() { String::new() } else { format!("{};", base.join(";")) };
+        for seed in 0..2 {
+            for n in [1, 2] {
+                let pp_set = format!("{prefix}{extra}{count}={n}");
+                csv += &format!(
+                    "{app}-pp{n}-s{seed},ok,s,{app},none,per-pixel:{n},{n},0,{seed},,{pp_set},0.{n},0.0{n},0.{n}\n"
+                );
+            }
+            for (i, p) in ["im", "vgc"].iter().enumerate() {
+                for (j, c) in budgets.iter().enumerate() {
+                    let (rmse, secs) = (0.05 + 0.01 * (i + j) as f64, 0.3 + j as f64);
+                    csv +=
+                        &format!("{app}-{p}-{c}-s{seed},ok,s,{app},{p},{p},,{c},{seed},,{set},{rmse},{rmse},{secs}\n");
+                }
+            }
+        }
+    }
+    // The second reference of cacheao: per-pixel runs (varied empty, as the sweep writes them) and a swept run.
+    csv += "cacheao-pp4-x-s0,ok,s,cacheao,none,per-pixel:4,4,0,0,,maxdistance=0.5;gather=4,0.01,0.001,2.0\n";
+    csv += "cacheao-im-10-x-s0,ok,s,cacheao,im,im maxdistance=0.5,,10,0,maxdistance=0.5,maxdistance=0.5,0.2,0.02,0.4\n";
+    dir.write("results.csv", &csv);
+    let o = Command::new(env!("CARGO_BIN_EXE_cachert")).args(["experiment", "--replot"]).arg(&dir.0).output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let svg = |name: &str| {
+        std::fs::read_to_string(dir.path(name)).unwrap_or_else(|_| panic!("no {name} in {:?}", dir.entries()))
+    };
+    for (app, _, _, _) in apps {
+        // Per-pixel (2 counts), im and vgc (2 budgets each): 6 points in each of the two panels, so
+        // neither another application's runs nor the other reference's per-pixel run joined a line.
+        let time = svg(&format!("s-{app}-error-vs-time.svg"));
+        assert_eq!(time.matches("<circle").count(), 12, "{app}");
+        let texts: Vec<&str> = time.lines().map(str::trim).collect();
+        for label in ["per-pixel", "im", "vgc"] {
+            assert_eq!(texts.iter().filter(|t| **t == label).count(), 2, "{app}: {label} in each panel's legend");
+        }
+        let caches = svg(&format!("s-{app}-error-vs-caches.svg"));
+        assert_eq!(caches.matches("<circle").count(), 8, "{app}");
+    }
+    // The other reference's per-pixel run: its own time chart, named by its setting.
+    let other = svg("s-cacheao-maxdistance-0.5-error-vs-time.svg");
+    assert_eq!(other.matches("<circle").count(), 2);
+    assert!(other.contains("maxdistance-0.5"));
+    assert!(dir.path("s-cacheao-10-error-vs-maxdistance.svg").is_file(), "{:?}", dir.entries());
+}

@@ -2,13 +2,18 @@
 //! a swept parameter with defaults and best values, Table 4 timings, the claims), charts as SVG and PNG
 //! (error over time with the per-pixel estimator, over caches, over the swept value), and `report.html`,
 //! which headless Chromium loads with every picture decoded and no script error. A page with a broken
-//! picture is caught by the same check.
+//! picture is caught by the same check. The report opens with which method wins where (computed from the
+//! results) and the charts, then the tables; a table that would be all "—" is left out (issue 42).
 
 mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use cachert::experiment::report;
+use cachert::experiment::results::{parse_csv, write_tables};
+use cachert::experiment::spec::Spec;
+use cachert::experiment::tables::Table;
 use common::TempDir;
 
 fn root() -> PathBuf {
@@ -131,6 +136,27 @@ fn a_sweep_writes_the_papers_tables_charts_and_a_report_that_loads_in_chromium()
         assert!(html.contains(needle), "report lacks {needle}");
     }
     assert!(html.contains("HDR-FLIP maps") && html.contains("Cache overlays") && html.contains("Largest errors"));
+    // The page opens with who wins and the charts; the tables and images follow.
+    let at = |needle: &str| html.find(needle).unwrap_or_else(|| panic!("report lacks {needle}"));
+    assert!(at("id=\"summary\"") < at("id=\"charts\"") && at("id=\"charts\"") < at("id=\"tables\""));
+    assert!(at("id=\"tables\"") < at("id=\"g0\""));
+    // The summary names the method with the lowest mean RMSE at each budget, computed here from results.csv.
+    for caches in ["40", "80", "160"] {
+        let mut means: Vec<(String, f64)> = Vec::new();
+        for f in csv.lines().skip(1).map(|l| l.split(',').collect::<Vec<_>>()) {
+            if f[col("caches")] != caches || f[col("placement")] == "none" || !f[col("varied")].is_empty() {
+                continue;
+            }
+            let rmse: f64 = f[col("rmse")].parse().unwrap();
+            match means.iter_mut().find(|(m, _)| m == f[col("method")]) {
+                Some((_, sum)) => *sum += rmse,
+                None => means.push((f[col("method")].to_string(), rmse)),
+            }
+        }
+        let best = means.iter().min_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
+        let line = format!("spheres, {caches} caches: lowest RMSE <b>{}</b>", best.0);
+        assert!(html[..at("id=\"charts\"")].contains(&line), "the summary lacks {line:?}");
+    }
     let images = html.matches("<img").count();
     // 3 charts + the comparer's 2 + reference + 6 × (image, map, overlay) + 2 windows × 7 crops.
     assert_eq!(images, 3 + 2 + 1 + 6 * 3 + 2 * 7, "pictures in the page");
@@ -146,4 +172,44 @@ fn a_sweep_writes_the_papers_tables_charts_and_a_report_that_loads_in_chromium()
     let bad = dir.write("broken.html", broken);
     let check = browser_check(&browser, &bad);
     assert!(check.starts_with("fail") && check.contains("reference"), "{check}");
+}
+
+/// The page without rendering: records from a results.csv, no run images (so no image sections).
+fn page_of(csv: &str, extra: Vec<Table>) -> (String, String) {
+    let dir = TempDir::new("report-page");
+    let records = parse_csv(Path::new("results.csv"), csv).unwrap();
+    let mut tables = cachert::experiment::tables::all(&records);
+    tables.extend(extra);
+    let spec = Spec { path: PathBuf::from("spec.toml"), jobs: Vec::new() };
+    let page = report::write(&spec, &records, &tables, &[], &dir.0).unwrap();
+    write_tables(&tables, &dir.path("tables.md")).unwrap();
+    (std::fs::read_to_string(page).unwrap(), std::fs::read_to_string(dir.path("tables.md")).unwrap())
+}
+
+#[test]
+fn the_report_opens_with_the_winners_and_leaves_out_tables_without_data() {
+    let mut csv = String::from("id,status,scene,application,placement,method,caches,seed,rmse,flip,total_s\n");
+    // At 10 caches vgc has the lower RMSE and im the lower FLIP; at 20 vgc both.
+    for (p, caches, rmse, flip) in
+        [("im", 10, 0.30, 0.010), ("vgc", 10, 0.20, 0.020), ("im", 20, 0.15, 0.009), ("vgc", 20, 0.10, 0.008)]
+    {
+        for seed in 0..2 {
+            csv += &format!("{p}-{caches}-{seed},ok,room,app,{p},{p},{caches},{seed},{rmse},{flip},1.5\n");
+        }
+    }
+    let dashes = Table {
+        title: "Nothing measured here".into(),
+        note: String::new(),
+        header: vec!["scene".into(), "caches".into(), "IM".into(), "VGC".into()],
+        rows: vec![vec!["room".into(), "10".into(), "—".into(), "—".into()]],
+    };
+    let (html, md) = page_of(&csv, vec![dashes]);
+    assert!(html.contains("room, 10 caches: lowest RMSE <b>vgc</b> (0.20000), lowest HDR-FLIP <b>im</b> (0.01000)"));
+    assert!(html.contains("room, 20 caches: lowest RMSE <b>vgc</b> (0.10000), lowest HDR-FLIP <b>vgc</b>"));
+    assert!(html.contains("lowest RMSE: vgc in 2 of 2 settings; lowest HDR-FLIP: im in 1 of 2 settings, vgc in 1"));
+    let at = |needle: &str| html.find(needle).unwrap_or_else(|| panic!("report lacks {needle}"));
+    assert!(at("id=\"summary\"") < at("id=\"charts\"") && at("id=\"charts\"") < at("id=\"tables\""));
+    // The table of dashes is in neither the report nor tables.md; the measured ones are.
+    assert!(!html.contains("Nothing measured here") && !md.contains("Nothing measured here"));
+    assert!(html.contains("All runs") && md.contains("## All runs"));
 }

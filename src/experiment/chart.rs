@@ -5,8 +5,10 @@
 //! - over the number of caches ([`XAxis::Caches`], the paper's Fig. 7);
 //! - over the value of a swept parameter ([`Plot`] built by the caller: the paper's Fig. 8 and Table 3).
 //!
-//! Text needs a TrueType font ([`font`]). Reads only the rows it is given; draws with plotters' SVG and
-//! bitmap backends. Depends on nothing else of the crate but `image` (to write the PNG).
+//! A method has one colour in every chart, a function of its name ([`super::palette`]); log axes label
+//! every decade they span ([`super::ticks`]). Text needs a TrueType font ([`font`]). Reads only the rows it
+//! is given; draws with plotters' SVG and bitmap backends. Depends on nothing else of the crate but `image`
+//! (to write the PNG).
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -14,6 +16,9 @@ use std::sync::OnceLock;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
+use super::palette::colour_of;
+use super::ticks::log_ticks;
+pub(crate) use super::ticks::tick;
 use crate::error::{Error, Result};
 
 /// One measured run as a chart draws it: a point of a series before the mean over seeds.
@@ -35,7 +40,8 @@ pub struct Row {
     pub secs: f64,
 }
 
-/// Colours of the series, in order of first appearance (the charts of `cli` use them too).
+/// Colours by position, for charts whose series are not methods (the pbrt comparison's, `bench`); the
+/// experiment's charts colour a method by its name ([`colour_of`]).
 pub const PALETTE: [RGBColor; 10] = [
     RGBColor(0, 0, 0),
     RGBColor(213, 94, 0),
@@ -229,45 +235,6 @@ pub fn save(plot: &Plot, path: &Path) -> Result<()> {
     crate::image::write_rgb8_png(SIZE.0 as usize, SIZE.1 as usize, &rgb, &png)
 }
 
-/// An axis label: `v` to six significant digits without trailing zeros (plotters' own labels print a log
-/// axis' ticks in full, e.g. 0.30000000000000004).
-pub(crate) fn tick(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() {
-        return format!("{v}");
-    }
-    let decimals = (5 - v.abs().log10().floor() as i32).clamp(0, 15) as usize;
-    let s = format!("{v:.decimals$}");
-    if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
-}
-
-/// Ticks of a logarithmic axis over [lo, hi]: the labelled ones (1, 2 and 5 times a power of ten, or every
-/// multiple 1–9 when fewer than four of those fall in the range) and the grid lines (every multiple 1–9).
-/// plotters' own log axis labels only from the first power of ten inside the range, which left an error
-/// axis spanning 0.04–1.2 with no label under the importance-caching points at 0.05–0.06.
-fn log_ticks(lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
-    let (mut labelled, mut grid) = (Vec::new(), Vec::new());
-    if !(lo > 0.0 && hi > lo && hi.is_finite()) {
-        return (labelled, grid);
-    }
-    let mut e = lo.log10().floor() as i32;
-    while 10f64.powi(e) <= hi {
-        for m in 1..=9 {
-            let v = m as f64 * 10f64.powi(e);
-            if (lo..=hi).contains(&v) {
-                grid.push(v);
-                if matches!(m, 1 | 2 | 5) {
-                    labelled.push(v);
-                }
-            }
-        }
-        e += 1;
-    }
-    if labelled.len() < 4 {
-        labelled = grid.clone();
-    }
-    (labelled, grid)
-}
-
 /// Draws the two panels of `plot` on `root`.
 fn draw<DB: DrawingBackend>(plot: &Plot, root: &DrawingArea<DB, Shift>) -> std::result::Result<(), String> {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
@@ -298,8 +265,9 @@ fn draw<DB: DrawingBackend>(plot: &Plot, root: &DrawingArea<DB, Shift>) -> std::
                     .y_label_formatter(&|v| tick(*v))
                     .draw()
                     .map_err(e)?;
-                for (i, (name, points)) in plot.series.iter().enumerate() {
-                    let colour = PALETTE[i % PALETTE.len()];
+                for (name, points) in &plot.series {
+                    // By name, so that a method has one colour in every chart of a report.
+                    let colour = colour_of(name);
                     let line: Vec<(f64, f64)> = points.iter().map(|(x, p)| (*x, metric(p).0)).collect();
                     chart
                         .draw_series(LineSeries::new(line.clone(), colour.stroke_width(2)))
@@ -325,7 +293,10 @@ fn draw<DB: DrawingBackend>(plot: &Plot, root: &DrawingArea<DB, Shift>) -> std::
         let (labelled, grid) = log_ticks(lo, hi);
         let y = (lo..hi).log_scale().with_key_points(labelled).with_light_points(grid);
         if plot.log_x {
-            body!(builder.build_cartesian_2d((x_lo.max(1e-3) * 0.8..x_hi * 1.25).log_scale(), y));
+            let (x_lo, x_hi) = (x_lo.max(1e-3) * 0.8, x_hi * 1.25);
+            let (labelled, grid) = log_ticks(x_lo, x_hi);
+            let x = (x_lo..x_hi).log_scale().with_key_points(labelled).with_light_points(grid);
+            body!(builder.build_cartesian_2d(x, y));
         } else {
             let pad = ((x_hi - x_lo) * 0.05).max(1e-6);
             body!(builder.build_cartesian_2d(x_lo - pad..x_hi + pad, y));
@@ -337,33 +308,6 @@ fn draw<DB: DrawingBackend>(plot: &Plot, root: &DrawingArea<DB, Shift>) -> std::
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn log_axes_label_every_decade_they_span() {
-        // 0.04–1.2: 0.05 and 0.1, 0.2, 0.5, 1 labelled; the grid has every multiple.
-        let (labelled, grid) = log_ticks(0.04, 1.2);
-        assert_eq!(labelled.iter().map(|&v| tick(v)).collect::<Vec<_>>(), ["0.05", "0.1", "0.2", "0.5", "1"]);
-        assert_eq!(grid.len(), 6 + 9 + 1);
-        // Inside one decade too few of 1, 2, 5 fall in the range: every multiple is labelled.
-        let (labelled, _) = log_ticks(0.0018, 0.0065);
-        assert_eq!(
-            labelled.iter().map(|&v| tick(v)).collect::<Vec<_>>(),
-            ["0.002", "0.003", "0.004", "0.005", "0.006"]
-        );
-        assert!(log_ticks(0.0, 1.0).0.is_empty());
-    }
-
-    #[test]
-    fn tick_labels_have_six_significant_digits_and_no_float_noise() {
-        assert_eq!(tick(0.30000000000000004), "0.3");
-        assert_eq!(tick(0.6000000000000001), "0.6");
-        assert_eq!(tick(0.00195), "0.00195");
-        assert_eq!(tick(1234.5), "1234.5");
-        assert_eq!(tick(20.0), "20");
-        assert_eq!(tick(-0.125), "-0.125");
-        assert_eq!(tick(1e-7), "0.0000001");
-        assert_eq!(tick(0.0), "0");
-    }
 
     fn row(placement: &str, caches: usize, seed: u64, rmse: f64, secs: f64) -> Row {
         Row { scene: "s".into(), placement: placement.into(), caches, seed, rmse, flip: rmse / 10.0, secs }

@@ -220,7 +220,7 @@ pub fn run(
 }
 
 /// One row of `results.csv`: a run, its settings, what it measured and cost.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct Record {
     /// The job id (its files are `runs/<id>.*`).
     pub id: String,

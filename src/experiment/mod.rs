@@ -19,6 +19,7 @@ pub mod bench;
 pub mod chart;
 pub mod figures;
 pub mod jobs;
+pub mod palette;
 mod per_pixel;
 pub mod ratios;
 pub mod report;
@@ -26,6 +27,8 @@ pub mod results;
 pub mod spec;
 pub mod summary;
 pub mod tables;
+pub mod ticks;
+pub mod wins;
 
 /// The part of stored reference file names that depends on the sweep's `--set` parameters (empty without
 /// any), so a reference made with other parameters (say another `maxdistance`) is never reused. The cache

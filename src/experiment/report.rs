@@ -1,12 +1,13 @@
-//! `report.html`: one self-contained page (pictures embedded as data URIs, no network) with a sweep's
-//! tables and charts and, per scene and application at the middle budget (seed 0), the images side by side —
+//! `report.html`: one self-contained page (pictures embedded as data URIs, no network) that opens with
+//! which method wins where ([`super::wins`]) and the sweep's charts, then its tables (a table that would be
+//! all "—" is left out) and, per scene and application at the middle budget (seed 0), the images side by side —
 //! the reference and each method, its HDR-FLIP map and its cache overlay — a slider to compare any two of
 //! them, and crops of the regions with the largest error.
 //!
 //! The page checks itself when it loads: every picture decoded and no script error, written to the body's
 //! `data-check` attribute (`ok …` or `fail …`), which the headless-browser test reads.
 //!
-//! Depends on `jobs` (records, run files), `summary`, `tables`, `figures`, `image` and `metrics`.
+//! Depends on `jobs` (records, run files), `summary`, `wins`, `tables`, `figures`, `image` and `metrics`.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -278,28 +279,9 @@ window.addEventListener('load', () => {
 });
 "#;
 
-/// Writes `out/report.html` from the sweep's records, tables and charts; returns its path.
-pub fn write(spec: &Spec, records: &[Record], tables: &[Table], figures: &[Figure], out: &Path) -> Result<PathBuf> {
-    let mut body = String::new();
-    let ok = summary::ok(records).count();
-    let _ = writeln!(
-        body,
-        "<h1>Experiment: {}</h1>\n<p class=\"note\">{} runs: {ok} measured, {} failed or missing (see the All runs tables). \
-         Every error is against the per-sample reference of the same estimator.</p>",
-        escape(&spec.path.display().to_string()),
-        records.len(),
-        records.len() - ok
-    );
-    let groups = pairs(records);
-    body.push_str("<nav><a href=\"#tables\">tables</a><a href=\"#charts\">charts</a>");
-    for (i, (s, a)) in groups.iter().enumerate() {
-        let _ = write!(body, "<a href=\"#g{i}\">{} {}</a>", escape(s), escape(a));
-    }
-    body.push_str("</nav>\n<section id=\"tables\"><h2>Tables</h2>\n");
-    for t in tables {
-        body.push_str(&t.html());
-    }
-    body.push_str("</section>\n<section id=\"charts\" class=\"charts\"><h2>Charts</h2>\n");
+/// The charts section: each figure's SVG embedded, with its caption.
+fn charts(body: &mut String, figures: &[Figure]) -> Result<()> {
+    body.push_str("<section id=\"charts\" class=\"charts\"><h2>Charts</h2>\n");
     for f in figures {
         let svg = std::fs::read(&f.svg).map_err(|e| crate::error::Error::file(&f.svg, format!("cannot read: {e}")))?;
         let name = f.svg.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
@@ -312,6 +294,42 @@ pub fn write(spec: &Spec, records: &[Record], tables: &[Table], figures: &[Figur
             escape(&f.application),
             escape(&f.caption)
         );
+    }
+    body.push_str("</section>\n");
+    Ok(())
+}
+
+/// Writes `out/report.html` from the sweep's records, tables and charts; returns its path. The page opens
+/// with the summary of which method wins where and the charts; the tables (those with data) and the
+/// images of each scene and application follow.
+pub fn write(spec: &Spec, records: &[Record], tables: &[Table], figures: &[Figure], out: &Path) -> Result<PathBuf> {
+    let mut body = String::new();
+    let ok = summary::ok(records).count();
+    let _ = writeln!(
+        body,
+        "<h1>Experiment: {}</h1>\n<p class=\"note\">{} runs: {ok} measured, {} failed or missing (see the All runs tables). \
+         Every error is against the per-sample reference of the same estimator.</p>",
+        escape(&spec.path.display().to_string()),
+        records.len(),
+        records.len() - ok
+    );
+    let groups = pairs(records);
+    let wins = super::wins::html(&super::wins::winners(records));
+    body.push_str("<nav>");
+    if !wins.is_empty() {
+        body.push_str("<a href=\"#summary\">who wins</a>");
+    }
+    body.push_str("<a href=\"#charts\">charts</a><a href=\"#tables\">tables</a>");
+    for (i, (s, a)) in groups.iter().enumerate() {
+        let _ = write!(body, "<a href=\"#g{i}\">{} {}</a>", escape(s), escape(a));
+    }
+    body.push_str("</nav>\n");
+    // What a reader wants first: who wins, then the charts; the tables and the images follow.
+    body.push_str(&wins);
+    charts(&mut body, figures)?;
+    body.push_str("<section id=\"tables\"><h2>Tables</h2>\n");
+    for t in tables.iter().filter(|t| t.has_data()) {
+        body.push_str(&t.html());
     }
     body.push_str("</section>\n");
     for (i, (s, a)) in groups.iter().enumerate() {

@@ -294,11 +294,12 @@ pub fn generated_note(dir_hint: &str) -> String {
     )
 }
 
-/// Writes `tables` as Markdown to `path`, under the generated-file note.
+/// Writes `tables` as Markdown to `path`, under the generated-file note; a table that would be all "—"
+/// ([`Table::has_data`]) is left out.
 pub fn write_tables(tables: &[Table], path: &Path) -> Result<()> {
     let dir = path.parent().map_or(".".to_string(), |d| d.display().to_string());
     let mut markdown = generated_note(if dir.is_empty() { "." } else { &dir });
-    markdown.extend(tables.iter().map(|t| t.markdown()));
+    markdown.extend(tables.iter().filter(|t| t.has_data()).map(|t| t.markdown()));
     crate::image::write_bytes(path, markdown.as_bytes())
 }
 

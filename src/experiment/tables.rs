@@ -28,6 +28,17 @@ pub struct Table {
 }
 
 impl Table {
+    /// Whether the table shows any measurement: some cell outside its label columns ([`LABELS`]: scene,
+    /// application, method, budget) that is neither "—" nor empty. A table that would be all "—" is left
+    /// out of `tables.md` and the report.
+    pub fn has_data(&self) -> bool {
+        let data: Vec<usize> =
+            (0..self.header.len()).filter(|&i| !LABELS.contains(&self.header[i].to_lowercase().as_str())).collect();
+        self.rows.iter().any(|row| {
+            row.iter().enumerate().any(|(i, c)| (data.contains(&i) || i >= self.header.len()) && !no_data(c))
+        })
+    }
+
     /// As Markdown: a `##` heading, the note, the table.
     pub fn markdown(&self) -> String {
         let mut t = format!("## {}\n\n", self.title);
@@ -64,6 +75,14 @@ impl Table {
         t.push_str("</table>\n");
         t
     }
+}
+
+/// The column names that label a row rather than measure something (see [`Table::has_data`]).
+pub const LABELS: [&str; 6] = ["scene", "application", "scene, application", "method", "caches", "placement"];
+
+/// Whether a cell holds no measurement: "—", empty, or only "—" and separators ("— / —").
+fn no_data(cell: &str) -> bool {
+    cell.chars().all(|c| c == '—' || c == '/' || c == '*' || c.is_whitespace())
 }
 
 /// `s` with `&`, `<`, `>` and `"` escaped for HTML.
@@ -480,5 +499,19 @@ mod tests {
         assert_eq!(t.markdown(), "## A <b>\n\n| x | y |\n|---|---|\n| **1** | a&b |\n\n");
         let h = t.html();
         assert!(h.contains("<h3>A &lt;b&gt;</h3>") && h.contains("<td><b>1</b></td><td>a&amp;b</td>"), "{h}");
+    }
+
+    #[test]
+    fn a_table_of_dashes_has_no_data() {
+        let t = |rows: Vec<Vec<&str>>| Table {
+            title: "t".into(),
+            note: String::new(),
+            header: vec!["scene".into(), "caches".into(), "IM".into(), "VGC".into()],
+            rows: rows.into_iter().map(|r| r.into_iter().map(String::from).collect()).collect(),
+        };
+        // Labels alone are no data: the scene and the budget are there, every measurement is "—".
+        assert!(!t(vec![vec!["s", "100", "—", "— / —"], vec!["s", "200", "—", ""]]).has_data());
+        assert!(!t(vec![]).has_data());
+        assert!(t(vec![vec!["s", "100", "—", "**0.1**"]]).has_data());
     }
 }
