@@ -1,5 +1,5 @@
 //! The documentation keeps its promises (issue 42): every `cachert` command shown in `README.md`,
-//! `docs/` and `tests/README.md` names a subcommand that exists and only flags that subcommand accepts
+//! `docs/`, `tests/README.md` and the experiments' notes names a subcommand that exists and only flags that subcommand accepts
 //! (read from the binary's own clap definition, `cachert::cli::Cli`), and one without placeholders parses
 //! as the binary would parse it; the README's quick start runs (at 16×16 pixels); `.ci/run` runs the
 //! README's test command; every relative link, picture and cited repository path exists; and every
@@ -19,7 +19,8 @@ fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// The documents checked: the README, every Markdown file under `docs/`, and `tests/README.md`.
+/// The documents checked: the README, `tests/README.md`, every Markdown file under `docs/`, and the
+/// experiments' and the fuzzer's notes.
 fn documents() -> Vec<PathBuf> {
     fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
         let mut entries: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
@@ -34,6 +35,9 @@ fn documents() -> Vec<PathBuf> {
     }
     let mut docs = vec![root().join("README.md"), root().join("tests/README.md")];
     walk(&root().join("docs"), &mut docs);
+    docs.push(root().join("experiments/README.md"));
+    docs.push(root().join("examples/fuzz/README.md"));
+    walk(&root().join("experiments/notes"), &mut docs);
     docs
 }
 
@@ -289,11 +293,12 @@ fn cited_path(span: &str) -> Option<&str> {
     Some(span.split(':').next().unwrap_or(span))
 }
 
-fn check_cited_paths(text: &str, file: &str, repo: &Path) -> Vec<String> {
+/// Cited paths of a document in folder `dir` that exist neither from the repository's root nor from `dir`.
+fn check_cited_paths(text: &str, file: &str, repo: &Path, dir: &Path) -> Vec<String> {
     code_spans(&prose(text))
         .into_iter()
         .filter_map(|(line, span)| cited_path(&span).map(|p| (line, p.to_string())))
-        .filter(|(_, p)| !repo.join(p).exists())
+        .filter(|(_, p)| !repo.join(p).exists() && !dir.join(p).exists())
         .map(|(line, p)| format!("{file}:{line}: cites {p}, which does not exist"))
         .collect()
 }
@@ -410,7 +415,7 @@ fn every_relative_link_and_cited_path_exists() {
         nlinks += links(&text).len();
         npaths += code_spans(&prose(&text)).iter().filter(|(_, s)| cited_path(s).is_some()).count();
         problems.extend(check_links(&text, &d, root()));
-        problems.extend(check_cited_paths(&text, &rel, root()));
+        problems.extend(check_cited_paths(&text, &rel, root(), d.parent().unwrap()));
     }
     assert!(nlinks >= 50 && npaths >= 50, "only {nlinks} links and {npaths} cited paths found");
     report(problems);
@@ -516,7 +521,10 @@ mod checker {
         assert_eq!(check_links("[x](placements.md#no-such-heading)\n", &doc, repo).len(), 1);
         assert!(check_links("[x](placements.md#placements) <img src=\"report.png\">\n", &doc, repo).is_empty());
         assert_eq!(check_links("<img src=\"nope.png\">\n", &doc, repo).len(), 1);
-        assert_eq!(check_cited_paths("see `src/nope.rs:12` and `src/lib.rs`\n", "bad.md", repo).len(), 1);
+        assert_eq!(
+            check_cited_paths("see `src/nope.rs:12` and `src/lib.rs`\n", "bad.md", repo, &repo.join("docs")).len(),
+            1
+        );
         let readme = repo.join("README.md");
         let table = "| x | 0.79 / 0.92 | `experiments/results/ao/tables.md` |\n";
         assert_eq!(check_numbers(table, &readme, repo), (vec![], 2));
