@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs what the experiment report's test needs and cachert's charts use, where it is missing: Debian's
 # chromium (tests/report.rs loads the report in headless Chromium) and a TrueType font (chart labels).
-# Part of the set-up (README, "Set-up"); .ci/run runs it before the tests. The tests install nothing.
+# Part of the set-up (tests/README.md, "Set-up"); .ci/run runs it before the tests. The tests install nothing.
 # Idempotent: with both already there it prints nothing and exits 0 at once. When it cannot install them it
 # says why on stderr and exits 1.
 set -euo pipefail

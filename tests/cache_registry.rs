@@ -174,17 +174,16 @@ fn an_application_defined_in_a_test_renders_with_every_placement() {
 }
 
 #[test]
-fn every_registered_application_has_its_tables_in_the_readme_and_the_help() {
-    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
-    assert!(readme.contains(&markdown_table(cache::PARAMETERS)), "the generic table is not in the README");
+fn every_registered_application_has_its_tables_in_its_page_and_the_help() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let placements = std::fs::read_to_string(dir.join("docs/placements.md")).unwrap();
+    assert!(placements.contains(&markdown_table(cache::PARAMETERS)), "the generic table is not in docs/placements.md");
     let help = cache::help();
     for e in APPLICATIONS {
-        let heading = format!("### `{}`", e.name);
-        let at = readme.find(&heading).unwrap_or_else(|| panic!("README has no heading {heading}"));
+        let rel = format!("docs/integrators/{}.md", e.name);
+        let page = std::fs::read_to_string(dir.join(&rel)).unwrap_or_else(|err| panic!("{rel}: {err}"));
         let table = markdown_table(e.parameters);
-        let section = &readme[at..];
-        let end = section[heading.len()..].find("\n#").map_or(section.len(), |i| i + heading.len());
-        assert!(section[..end].contains(&table), "README's {heading} section lacks the table:\n{table}");
+        assert!(page.contains(&table), "{rel} lacks the table:\n{table}");
         assert!(help.contains(e.name) && e.parameters.iter().all(|p| help.contains(p.name)), "{help}");
     }
 }

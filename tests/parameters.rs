@@ -1,5 +1,6 @@
 //! Integrator parameters (issue 40): every integrator, per-pixel or cache-based, reads exactly the
-//! parameters of its table; the README shows each table as the code declares it; and no value given by
+//! parameters of its table; its documentation page (`docs/integrators/`) shows each table as the code declares
+//! it; and no value given by
 //! `--set` — NaN, ±∞, negative, zero, huge, not a number — panics: each renders or is a usage error that
 //! names the parameter.
 
@@ -65,16 +66,31 @@ fn every_integrator_reads_exactly_its_table() {
     }
 }
 
+/// The documentation page of an integrator.
+fn page(name: &str) -> (String, String) {
+    let rel = format!("docs/integrators/{name}.md");
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(&rel))
+        .unwrap_or_else(|e| panic!("{rel}: {e}"));
+    (rel, text)
+}
+
 #[test]
-fn the_readme_has_the_per_pixel_tables() {
-    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
-    // `ambientocclusion` is pbrt-v3's integrator, documented by pbrt-v3; the README tables the other two.
+fn each_integrator_page_has_its_table_as_the_code_declares_it() {
+    // `ambientocclusion` is pbrt-v3's integrator, documented by pbrt-v3; the page tables the other two.
+    let (rel, text) = page("per-pixel");
     for (name, table) in &per_pixel::PARAMETERS[1..] {
-        assert!(
-            readme.contains(&markdown_table(table)),
-            "README lacks the table of {name}:\n{}",
-            markdown_table(table)
-        );
+        let t = markdown_table(table);
+        assert!(text.contains(&t), "{rel} lacks the table of {name} as the code declares it; paste:\n{t}");
+    }
+    // Each cache application's own table on its page; the parameters every cache integrator shares are in
+    // docs/placements.md.
+    let placements = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/placements.md")).unwrap();
+    let t = markdown_table(integrator::cache::PARAMETERS);
+    assert!(placements.contains(&t), "docs/placements.md lacks the generic table as the code declares it; paste:\n{t}");
+    for e in APPLICATIONS {
+        let (rel, text) = page(e.name);
+        let t = markdown_table(e.parameters);
+        assert!(text.contains(&t), "{rel} lacks the table of {} as the code declares it; paste:\n{t}", e.name);
     }
 }
 
