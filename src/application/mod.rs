@@ -179,7 +179,7 @@ pub trait Application: Sync + Sized {
     const NAME: &'static str;
     /// One line saying what the integrator renders (for `--help`, `info` and error messages).
     const ABOUT: &'static str;
-    /// The application's own parameters (beside the cache driver's generic ones); the README has the same
+    /// The application's own parameters (beside the cache driver's generic ones); its page in docs/integrators/ has the same
     /// table under the application's name.
     const PARAMETERS: &'static [Parameter];
 

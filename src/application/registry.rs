@@ -1,5 +1,5 @@
 //! STAGE 5 (application): the one list of cache-based integrators, by the names users type (STYLE habit 10:
-//! one explicit table, no self-registration). Rendering, `render --help`, the README's parameter tables (a
+//! one explicit table, no self-registration). Rendering, `render --help`, the parameter tables of docs/ (a
 //! test checks them), `info`, `experiment --integrator` and the error messages that list integrators all read
 //! it. Registering an application is one line in the `applications!` invocation below.
 //!

@@ -121,7 +121,7 @@ pub struct StandIn {
     pub why: &'static str,
 }
 
-/// Every pbrt-v3 integrator cachert renders with another of its own (the README's table).
+/// Every pbrt-v3 integrator cachert renders with another of its own (the table of docs/supported.md).
 pub const STAND_INS: &[StandIn] = &[
     StandIn {
         pbrt: "volpath",

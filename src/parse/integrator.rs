@@ -5,7 +5,7 @@
 //!
 //! Each parameter is declared once, as a [`ParamDef`] (or a [`Choice`] among named values): its name,
 //! type, default, valid range and meaning. The getters of [`IntegratorParams`] take that declaration, so
-//! the default a render uses is the one the tables (`render --help`, the README) show, and every range
+//! the default a render uses is the one the tables (`render --help`, docs/) show, and every range
 //! check gives the same message: `file:line:col: INTEGRATOR: "NAME" must be …, got VALUE` (the location
 //! when the scene wrote the parameter). A parameter whose default is computed when the render starts
 //! (from the scene's size, the image or a flag) declares it in words and is read with
@@ -54,7 +54,7 @@ impl fmt::Display for DefaultValue {
     }
 }
 
-/// One documented integrator parameter: the rows of `cachert render --help` and of the README's tables
+/// One documented integrator parameter: the rows of `cachert render --help` and of the docs' tables
 /// (made by a [`ParamDef`] or a [`Choice`], which also read it).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Parameter {
@@ -493,7 +493,7 @@ pub fn help_text(title: &str, params: &[Parameter]) -> String {
     out
 }
 
-/// A parameter table as the README writes it: header, rule and one Markdown row per parameter.
+/// A parameter table as docs/ writes it: header, rule and one Markdown row per parameter.
 pub fn markdown_table(params: &[Parameter]) -> String {
     let mut out = String::from("| parameter | type | default | meaning |\n|---|---|---|---|\n");
     for p in params {

@@ -45,7 +45,7 @@ pub const MAXDEPTH: ParamDef<i64> =
 /// Most specular bounces `directlighting` follows (each level of its recursion keeps a BSDF).
 pub const MAX_SPECULAR_DEPTH: u32 = 1024;
 
-/// The parameters of `directlighting` (the README's table).
+/// The parameters of `directlighting` (the table of docs/integrators/per-pixel.md).
 pub const PARAMETERS: &[Parameter] = &[STRATEGY.row, MAXDEPTH.row];
 
 /// pbrt-v3's `directlighting` integrator: the parameters of [`PARAMETERS`].

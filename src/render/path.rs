@@ -31,7 +31,7 @@ pub const RRTHRESHOLD: ParamDef<f64> =
 pub const LIGHTSAMPLESTRATEGY: ParamDef<String> =
     ParamDef::text("lightsamplestrategy", "spatial", "`uniform`, `power` or `spatial` (per-voxel light probabilities)");
 
-/// The parameters of `path` (the README's table).
+/// The parameters of `path` (the table of docs/integrators/per-pixel.md).
 pub const PARAMETERS: &[Parameter] = &[MAXDEPTH.row, RRTHRESHOLD.row, LIGHTSAMPLESTRATEGY.row];
 
 /// pbrt-v3's `path` integrator: the parameters of [`PARAMETERS`].

@@ -1,4 +1,4 @@
-//! Importance caching's parameters (the `importancecache` table of the README): each declared once with
+//! Importance caching's parameters (the table of docs/integrators/importancecache.md): each declared once with
 //! its default and range, read into [`ImportanceCache`], reported back for `--stats`, and copied into the
 //! per-pixel baselines' settings.
 //!
@@ -115,7 +115,7 @@ pub const STRATIFY: ParamDef<bool> = ParamDef::bool(
     "the VPL draws of a pixel's sub-pixel samples are stratified across them (false: independent draws)",
 );
 
-/// The table, in the README's order.
+/// The table, in its page's order.
 pub const PARAMETERS: &[Parameter] = &[
     VPLS.row,
     VPLDEPTH.row,

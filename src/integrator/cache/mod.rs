@@ -186,7 +186,7 @@ pub fn help() -> String {
     }
     out.push_str(&format!(
         "(L is the scene's length scale: the diagonal of its bounding box, or {VIEW_FACTOR} times the extent of what \
-         the camera sees where that is smaller; README.md, \"Scene scale\".)\n"
+         the camera sees where that is smaller; docs/scene-scale.md.)\n"
     ));
     out
 }

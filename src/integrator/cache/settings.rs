@@ -24,7 +24,7 @@ pub const PLACEMENT: ParamDef<String> = ParamDef::text(
 pub const CACHES: ParamDef<i64> = ParamDef::computed(
     "caches",
     "B × pixels / (1920×1080)",
-    "total cache budget N_c; B is the paper's budget for the application at 1920×1080 (in its README section)",
+    "total cache budget N_c; B is the paper's budget for the application at 1920×1080 (on its page in docs/integrators/)",
 )
 .valid(Valid::AtLeast { lo: 1.0, finite: true });
 /// `ratio`: R.
