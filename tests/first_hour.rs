@@ -155,3 +155,24 @@ fn routine_facts_are_notes_and_image_changes_are_warnings() {
     assert_eq!(kind("is replaced by --integrator cacheao"), Some(true), "{err}");
     assert_eq!(kind("participating media"), Some(false), "a warning: {err}");
 }
+
+#[test]
+fn irradiance_caching_renders_the_whole_image_by_default() {
+    // A lit plane has no indirect light (it cannot see itself), so the default image, `output full`, is the
+    // directlighting image of the same seed, bit for bit; `output indirect` is black.
+    let dir = TempDir::new("first-hour-irradiance");
+    let image = |integrator: &str, args: &[&str]| {
+        let (code, err, written) = render(&dir, &common::lit_plane(integrator), args);
+        assert!(code == 0 && written, "{integrator}: {err}");
+        cachert::image::read(&dir.path("out.pfm")).unwrap()
+    };
+    let default = image("Integrator \"irradiancecache\" \"integer caches\" [8] \"integer gather\" [4]", &[]);
+    let direct = image("Integrator \"directlighting\"", &[]);
+    assert!(common::mean(&direct) > 0.0);
+    assert_eq!(default.pixels, direct.pixels);
+    let indirect = image(
+        "Integrator \"irradiancecache\" \"integer caches\" [8] \"integer gather\" [4]",
+        &["--set", "output=indirect"],
+    );
+    assert!(indirect.pixels.iter().all(|p| *p == [0.0; 3]));
+}
