@@ -37,6 +37,7 @@ pub mod metrics;
 pub mod os;
 pub mod parse;
 pub mod placement;
+pub mod provenance;
 pub mod render;
 pub mod sampling;
 pub mod scene;

@@ -490,7 +490,7 @@ mod checker {
         assert_eq!(problems("Run `cachert info SCENE.pbrt --verbose`.\n").len(), 1);
         assert_eq!(problems("```\ncachert golden check --dir D --made-up\n```\n").len(), 1);
         assert_eq!(problems("```\ncachert golden add SCENE\n    [--made-up N]\n```\n").len(), 1);
-        assert_eq!(problems("```\ntarget/release/cachert render x.pbrt --cropwindow 0,1,0,1\n```\n").len(), 1);
+        assert_eq!(problems("```\ntarget/release/cachert render x.pbrt --cropwndow 0,1,0,1\n```\n").len(), 1);
         // A flag of another subcommand is not accepted.
         assert_eq!(problems("```\ncargo run --release -- compare a.exr b.exr --placement im\n```\n").len(), 1);
     }

@@ -176,3 +176,58 @@ fn irradiance_caching_renders_the_whole_image_by_default() {
     );
     assert!(indirect.pixels.iter().all(|p| *p == [0.0; 3]));
 }
+
+#[test]
+fn a_crop_renders_the_same_pixels_as_that_part_of_the_whole_image() {
+    // pbrt-v3's --cropwindow: x0,x1,y0,y1 as fractions, rounded up to pixels (here 2..6 × 0..4 of 8×8). Each
+    // pixel's samples do not depend on the others, so the crop is that part of the whole render, bit for bit.
+    let dir = TempDir::new("first-hour-crop");
+    let text = common::lit_plane("Integrator \"directlighting\"");
+    let (code, err, _) = render(&dir, &text, &["--spp", "2"]);
+    assert_eq!(code, 0, "{err}");
+    let whole = cachert::image::read(&dir.path("out.pfm")).unwrap();
+    let (code, err, _) = render(&dir, &text, &["--spp", "2", "--crop", "0.25,0.75,0,0.5"]);
+    assert_eq!(code, 0, "{err}");
+    let crop = cachert::image::read(&dir.path("out.pfm")).unwrap();
+    assert_eq!((crop.width, crop.height), (4, 4));
+    assert_eq!(Some(crop.clone()), whole.crop(2, 0, 4, 4));
+    // pbrt-v3's spelling of the flag; bad windows are the flag's errors and write nothing.
+    let (code, err, _) = render(&dir, &text, &["--spp", "2", "--cropwindow", "0.25,0.75,0,0.5"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(cachert::image::read(&dir.path("out.pfm")).unwrap(), crop);
+    for (bad, why) in [
+        ("0.5,0.25,0,1", "x0 < x1"),
+        ("0,1,0", "four numbers"),
+        ("0,1.5,0,1", "between 0 and 1"),
+        ("0.1,0.11,0,1", "covers no pixel of the 8x8 film"),
+    ] {
+        let (code, err, written) = render(&dir, &text, &["--crop", bad]);
+        assert!(code == 2 && !written && err.contains("--crop") && err.contains(why), "{bad}: {err}");
+    }
+}
+
+#[test]
+fn one_render_writes_every_outfile_it_is_given() {
+    let dir = TempDir::new("first-hour-outfiles");
+    let file = dir.write("scene.pbrt", common::lit_plane("Integrator \"directlighting\""));
+    let (exr, png) = (dir.path("a.exr"), dir.path("a.png"));
+    let o = Command::new(env!("CARGO_BIN_EXE_cachert"))
+        .arg("render")
+        .arg(&file)
+        .args(["--spp", "1", "--outfile", exr.to_str().unwrap(), "--outfile", png.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (a, b) = (cachert::image::read(&exr).unwrap(), cachert::image::read(&png).unwrap());
+    assert_eq!((a.width, a.height, b.width, b.height), (8, 8, 8, 8));
+    // A bad second name stops the run before anything is written.
+    std::fs::remove_file(&exr).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_cachert"))
+        .arg("render")
+        .arg(&file)
+        .args(["--outfile", exr.to_str().unwrap(), "--outfile", dir.path("a.jpg").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!exr.exists());
+}

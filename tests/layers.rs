@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[(&str, u32)] = &[
     ("error", 0),
     ("os", 0),
+    ("provenance", 0),
     ("test_support", 0),
     ("parse", 1),
     ("image", 1),

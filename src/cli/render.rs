@@ -9,7 +9,7 @@ use crate::error::Result;
 use crate::integrator::RenderSettings;
 use crate::integrator::cache::{CacheOverrides, Placement};
 use crate::job::{Outputs, RenderJob};
-use crate::scene::LoadOptions;
+use crate::scene::{CropWindow, LoadOptions};
 
 /// Flags of `cachert render`.
 #[derive(clap::Args, Debug, Clone)]
@@ -17,10 +17,11 @@ use crate::scene::LoadOptions;
 pub struct RenderArgs {
     /// The pbrt-v3 scene file.
     pub scene: PathBuf,
-    /// Output image (.exr float RGB, .pfm float32, .png 8-bit sRGB preview); default: the Film's
-    /// "filename", else the scene's name with .exr, in the current directory.
+    /// Output image (.exr float RGB, .pfm float32, .png 8-bit sRGB preview); repeat it to write the same
+    /// image in several files (--outfile a.exr --outfile a.png); default: the Film's "filename", else the
+    /// scene's name with .exr, in the current directory.
     #[arg(long)]
-    pub outfile: Option<PathBuf>,
+    pub outfile: Vec<PathBuf>,
     /// Worker threads (default, or 0 as in pbrt-v3: all cores). The image does not depend on it.
     #[arg(long)]
     pub nthreads: Option<usize>,
@@ -33,6 +34,11 @@ pub struct RenderArgs {
     /// Film resolution WxH instead of the scene's (the screen window follows the new aspect ratio).
     #[arg(long, value_parser = super::parse_resolution)]
     pub resolution: Option<[u32; 2]>,
+    /// Render only this part of the film, as pbrt-v3's --cropwindow: fractions x0,x1,y0,y1 (replacing the
+    /// Film's "cropwindow"); an EXR output keeps the full film as its display window and the crop as its
+    /// data window.
+    #[arg(long, visible_alias = "cropwindow", value_name = "X0,X1,Y0,Y1", value_parser = CropWindow::parse)]
+    pub crop: Option<CropWindow>,
     /// pbrt-v3's --quick: resolution ÷ 4, one pixel sample, one integrator sample.
     #[arg(long)]
     pub quick: bool,
@@ -80,7 +86,7 @@ pub fn run(args: &RenderArgs) -> Result<String> {
 pub fn job(args: &RenderArgs) -> RenderJob {
     RenderJob {
         scene: args.scene.clone(),
-        load: LoadOptions { quick: args.quick, resolution: args.resolution },
+        load: LoadOptions { quick: args.quick, resolution: args.resolution, crop: args.crop },
         settings: RenderSettings {
             seed: args.seed,
             spp: args.spp,
@@ -92,7 +98,7 @@ pub fn job(args: &RenderArgs) -> RenderJob {
             cache: CacheOverrides { placement: args.placement, caches: args.caches, subpixels: None },
         },
         outputs: Outputs {
-            image: args.outfile.clone(),
+            images: args.outfile.clone(),
             overlay: args.overlay.clone(),
             dmap: args.dmap.clone(),
             stats: args.stats.clone(),

@@ -48,7 +48,7 @@ pub fn render_job(job: &Job, out: &Path, threads: Option<usize>) -> Result<Rende
         (job.seed == 0 && placement != Placement::Reference).then(|| runs.join(format!("{}{OVERLAY}", job.id)));
     Ok(RenderJob {
         scene: job.file.clone(),
-        load: LoadOptions { quick: false, resolution: job.resolution },
+        load: LoadOptions { resolution: job.resolution, ..LoadOptions::default() },
         settings: RenderSettings {
             seed: job.seed,
             threads,
@@ -58,7 +58,7 @@ pub fn render_job(job: &Job, out: &Path, threads: Option<usize>) -> Result<Rende
             ..Default::default()
         },
         outputs: Outputs {
-            image: Some(runs.join(format!("{}.exr", job.id))),
+            images: vec![runs.join(format!("{}.exr", job.id))],
             overlay,
             dmap: None,
             stats: Some(runs.join(format!("{}.json", job.id))),

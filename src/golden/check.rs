@@ -36,7 +36,7 @@ pub fn render_spec(dir: &Path, spec: &Spec, threads: Option<usize>) -> Result<Re
     let placement = spec.placement.as_deref().map(Placement::parse).transpose()?;
     let job = RenderJob {
         scene: resolve(dir, &spec.scene),
-        load: LoadOptions { resolution: spec.resolution, quick: false },
+        load: LoadOptions { resolution: spec.resolution, ..LoadOptions::default() },
         settings: RenderSettings {
             seed: spec.seed,
             spp: spec.spp,

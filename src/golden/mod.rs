@@ -21,7 +21,7 @@
 pub mod check;
 pub mod manifest;
 pub mod matrix;
-pub mod provenance;
+pub use crate::provenance;
 
 pub use check::{Errors, Outcome, Verdict, check, render_spec, update};
 pub use manifest::{Entry, MANIFEST, Manifest, Recorded, Spec};

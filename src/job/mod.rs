@@ -18,9 +18,9 @@ use crate::scene::{LoadOptions, LoadStats, load};
 /// Files a job writes.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Outputs {
-    /// The image (`.exr`, `.pfm` or `.png`); `None`: the Film's `"filename"`, else the scene's stem with
-    /// `.exr`, in the current folder.
-    pub image: Option<PathBuf>,
+    /// The image files (each `.exr`, `.pfm` or `.png`, the same pixels in each; `--outfile` repeated);
+    /// none: the Film's `"filename"`, else the scene's stem with `.exr`, in the current folder.
+    pub images: Vec<PathBuf>,
     /// Cache-based renders: the image with stage-1 caches (red) and stage-2 caches (cyan) marked.
     pub overlay: Option<PathBuf>,
     /// Cache-based renders: the DGS discontinuity map (EXR/PFM, plus a PNG preview).
@@ -34,7 +34,7 @@ pub struct Outputs {
 pub struct RenderJob {
     /// The pbrt-v3 scene file.
     pub scene: PathBuf,
-    /// `--quick` and `--resolution`, applied while loading.
+    /// `--quick`, `--resolution` and `--crop`, applied while loading.
     pub load: LoadOptions,
     /// Everything else that decides the image.
     pub settings: RenderSettings,
@@ -45,8 +45,8 @@ pub struct RenderJob {
 /// A finished job.
 #[derive(Debug)]
 pub struct Finished {
-    /// Where the image went.
-    pub image_path: PathBuf,
+    /// Where the image went (one path per file written).
+    pub image_paths: Vec<PathBuf>,
     /// What the render produced.
     pub output: RenderOutput,
     /// The times of loading.
@@ -70,41 +70,41 @@ impl RenderJob {
         // Every output named on the command line is checked before the scene is read, so a typo in a folder
         // or an extension costs nothing; the Film's own file name once the scene is read.
         let o = &self.outputs;
-        for (flag, path, image) in [
-            ("--outfile", &o.image, true),
-            ("--overlay", &o.overlay, true),
-            ("--dmap", &o.dmap, true),
-            ("--stats", &o.stats, false),
-        ] {
-            if let Some(p) = path.as_deref().filter(|p| *p != Path::new("-")) {
-                check_output(flag, p, image)?;
+        let named = o.images.iter().map(|p| ("--outfile", p, true));
+        let cache = [("--overlay", &o.overlay, true), ("--dmap", &o.dmap, true), ("--stats", &o.stats, false)];
+        let cache = cache.into_iter().filter_map(|(f, p, image)| Some((f, p.as_ref()?, image)));
+        for (flag, path, image) in named.chain(cache) {
+            if path != Path::new("-") {
+                check_output(flag, path, image)?;
             }
         }
         let loaded = load(&self.scene, self.load)?;
         warnings.extend(loaded.warnings);
-        let image_path = self.image_path(&loaded.scene.film.filename);
-        if o.image.is_none() {
-            check_output("Film \"filename\"", &image_path, true)?;
+        let image_paths = self.image_paths(&loaded.scene.film.filename);
+        if o.images.is_empty() {
+            for p in &image_paths {
+                check_output("Film \"filename\"", p, true)?;
+            }
         }
         let output = render(&loaded.scene, loaded.integrator.as_ref(), &self.settings, warnings)?;
-        self.write(&output, &image_path)?;
-        Ok(Finished { image_path, output, load: loaded.stats })
+        self.write(&output, &image_paths)?;
+        Ok(Finished { image_paths, output, load: loaded.stats })
     }
 
-    /// The image's path: [`Outputs::image`], else the Film's name, else the scene's stem with `.exr`.
-    fn image_path(&self, film_name: &Option<PathBuf>) -> PathBuf {
-        if let Some(o) = &self.outputs.image {
-            return o.clone();
+    /// The images' paths: [`Outputs::images`], else the Film's name, else the scene's stem with `.exr`.
+    fn image_paths(&self, film_name: &Option<PathBuf>) -> Vec<PathBuf> {
+        if !self.outputs.images.is_empty() {
+            return self.outputs.images.clone();
         }
         if let Some(f) = film_name {
-            return f.clone();
+            return vec![f.clone()];
         }
         let stem = self.scene.file_stem().unwrap_or(Path::new("cachert").as_os_str());
-        PathBuf::from(stem).with_extension("exr")
+        vec![PathBuf::from(stem).with_extension("exr")]
     }
 
-    /// Writes the image and the cache outputs, checking every requested output before writing any.
-    fn write(&self, result: &RenderOutput, image_path: &Path) -> Result<()> {
+    /// Writes the images and the cache outputs, checking every requested output before writing any.
+    fn write(&self, result: &RenderOutput, image_paths: &[PathBuf]) -> Result<()> {
         let o = &self.outputs;
         let cache = result.cache.as_deref();
         if (o.overlay.is_some() || o.dmap.is_some() || o.stats.is_some()) && cache.is_none() {
@@ -121,7 +121,9 @@ impl RenderJob {
         for p in [&o.overlay, &o.dmap].into_iter().flatten() {
             crate::image::Format::from_path(p)?;
         }
-        crate::image::write(&result.image, image_path)?;
+        for p in image_paths {
+            crate::image::write(&result.image, p)?;
+        }
         if let Some(c) = cache {
             if let Some(p) = &o.overlay {
                 cache_outputs::write_overlay(c, p)?;
@@ -167,6 +169,9 @@ impl RenderJob {
         if let Some([w, h]) = self.load.resolution {
             flag("resolution", format!("{w}x{h}"));
         }
+        if let Some(c) = self.load.crop {
+            flag("crop", c.0.map(|v| v.to_string()).join(","));
+        }
         if let Some(n) = s.spp {
             flag("spp", n.to_string());
         }
@@ -182,16 +187,12 @@ impl RenderJob {
         if !s.progress {
             a.push("--quiet".into());
         }
-        for (name, path) in [
-            ("overlay", &self.outputs.overlay),
-            ("outfile", &self.outputs.image),
-            ("stats", &self.outputs.stats),
-            ("dmap", &self.outputs.dmap),
-        ] {
-            if let Some(p) = path {
-                a.push(format!("--{name}"));
-                a.push(p.display().to_string());
-            }
+        let o = &self.outputs;
+        let images = o.images.iter().map(|p| ("outfile", p));
+        let cache = [("overlay", &o.overlay), ("stats", &o.stats), ("dmap", &o.dmap)];
+        for (name, p) in images.chain(cache.into_iter().filter_map(|(n, p)| Some((n, p.as_ref()?)))) {
+            a.push(format!("--{name}"));
+            a.push(p.display().to_string());
         }
         a
     }
@@ -236,8 +237,8 @@ impl Finished {
         let cache = result.cache.as_deref();
         let samples = if cache.is_some() { "sub-pixel samples" } else { "spp" };
         let (w, h) = (result.image.width, result.image.height);
-        let wrote =
-            format!("wrote {} ({w}x{h}, {} {samples}, {})", self.image_path.display(), result.spp, result.integrator);
+        let paths: Vec<String> = self.image_paths.iter().map(|p| p.display().to_string()).collect();
+        let wrote = format!("wrote {} ({w}x{h}, {} {samples}, {})", paths.join(", "), result.spp, result.integrator);
         let load =
             format!("parse {:.3} s | scene build {:.3} s | BVH build {:.3} s", s.parse_secs, s.build_secs, s.bvh_secs);
         match cache {

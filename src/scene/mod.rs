@@ -40,6 +40,36 @@ pub struct LoadOptions {
     pub quick: bool,
     /// Film resolution instead of the scene's (the camera's screen window follows the new aspect ratio).
     pub resolution: Option<[u32; 2]>,
+    /// Crop window instead of the Film's `cropwindow` (pbrt-v3's `--cropwindow`).
+    pub crop: Option<CropWindow>,
+}
+
+/// A crop window given on the command line: fractions x0, x1, y0, y1 of the film, each in [0, 1], with
+/// x0 < x1 and y0 < y1 ([`CropWindow::parse`] makes only such windows, so equality is that of the numbers).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CropWindow(pub [f64; 4]);
+
+impl Eq for CropWindow {}
+
+impl CropWindow {
+    /// Reads `x0,x1,y0,y1` (pbrt-v3's `--cropwindow` order); the message says what is wrong.
+    pub fn parse(s: &str) -> std::result::Result<CropWindow, String> {
+        let v: Vec<f64> = s
+            .split([',', ' '])
+            .filter(|t| !t.is_empty())
+            .map(|t| t.trim().parse::<f64>().map_err(|_| format!("\"{t}\" is not a number")))
+            .collect::<std::result::Result<_, _>>()?;
+        let [x0, x1, y0, y1] = v[..] else {
+            return Err(format!("expected four numbers x0,x1,y0,y1, got {}", v.len()));
+        };
+        if v.iter().any(|c| !(0.0..=1.0).contains(c)) {
+            return Err("each of x0,x1,y0,y1 must be between 0 and 1".into());
+        }
+        if x0 >= x1 || y0 >= y1 {
+            return Err("the window is empty: x0 < x1 and y0 < y1 are needed".into());
+        }
+        Ok(CropWindow([x0, x1, y0, y1]))
+    }
 }
 
 /// What loading took and produced.

@@ -272,6 +272,18 @@ impl SceneBuilder {
             }
             self.film.resolution = r;
         }
+        if let Some(c) = self.opts.crop {
+            // pbrt-v3's --cropwindow replaces the Film's cropwindow.
+            self.film.crop = c.0;
+            let b = self.film.cropped_bounds();
+            if b.max[0] <= b.min[0] || b.max[1] <= b.min[1] {
+                let [x0, x1, y0, y1] = c.0;
+                let [w, h] = self.film.resolution;
+                return Err(Error::usage(format!(
+                    "--crop {x0},{x1},{y0},{y1}: the window covers no pixel of the {w}x{h} film"
+                )));
+            }
+        }
         let camera = match self.camera.take() {
             Some((named, world_from_camera, _)) => {
                 let c = Camera::from_directive(&named, &world_from_camera, &self.film, &mut self.warnings)?;

@@ -1,7 +1,8 @@
-//! Where a golden's code came from: the commit of the source tree this binary was built from, and whether
-//! that tree has uncommitted changes to the code (`src/`, `Cargo.toml`, `Cargo.lock`). `golden update` and
-//! `golden add` refuse to record from a tree with such changes unless asked (`--allow-dirty`), and then the
-//! recorded commit says `-dirty`: a golden must name code someone can check out.
+//! LAYER 0 (system probe): where this binary's code came from: the commit of the source tree it was built
+//! from, and whether that tree has uncommitted changes to the code (`src/`, `Cargo.toml`, `Cargo.lock`).
+//! `golden update` and `golden add` refuse to record from a tree with such changes unless asked
+//! (`--allow-dirty`), and then the recorded commit says `-dirty`: a golden must name code someone can check
+//! out. A rendered EXR records the same commit in its header.
 //!
 //! Depends on `git` being on the PATH; without it, or without the source tree (an installed binary), the
 //! provenance is unknown and nothing is refused.
