@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use cachert::Error;
-use cachert::image::{self, Image};
+use cachert::image::{self, Image, Metadata, Window};
 
 /// A fresh scratch directory under the system temp dir.
 fn scratch(tag: &str) -> PathBuf {
@@ -120,5 +120,53 @@ fn bad_files_are_errors_that_name_the_file() {
     }
     let e = image::read(&dir.join("missing.pfm")).unwrap_err().to_string();
     assert!(e.contains("missing.pfm") && e.contains("cannot read"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `write` (default metadata) gives the same bytes as before metadata existed: the fixture was written
+/// by the previous `image::write` (commit f5936be) from `gradient(5, 3)`, and the goldens compare EXR files.
+#[test]
+fn default_exr_bytes_are_unchanged() {
+    let dir = scratch("default-bytes");
+    let fixture = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/image_io/default-5x3.exr")).unwrap();
+    let (plain, with) = (dir.join("plain.exr"), dir.join("with.exr"));
+    image::write(&gradient(5, 3), &plain).unwrap();
+    image::write_with(&gradient(5, 3), &with, &Metadata::default()).unwrap();
+    assert_eq!(std::fs::read(&plain).unwrap(), fixture);
+    assert_eq!(std::fs::read(&with).unwrap(), fixture);
+    assert_eq!(image::read_metadata(&plain).unwrap(), Metadata::default());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A crop written like pbrt-v3's (display window the film, data window the crop) reads back with its window,
+/// its text attributes in order and its own pixels; PFM and PNG drop the metadata.
+#[test]
+fn window_and_attributes_round_trip() {
+    let dir = scratch("meta");
+    let im = gradient(6, 4);
+    let meta = Metadata {
+        window: Some(Window { full: [32, 24], origin: [10, 20] }),
+        attributes: vec![
+            ("cachert.integrator".into(), "irradiancecache".into()),
+            ("comments".into(), "a crop".into()),
+            ("cachert.seed".into(), "7".into()),
+        ],
+    };
+    for name in ["crop.exr", "crop.pfm", "crop.png"] {
+        image::write_with(&im, &dir.join(name), &meta).unwrap();
+    }
+    assert_eq!(image::read_metadata(&dir.join("crop.exr")).unwrap(), meta);
+    assert_eq!(image::read(&dir.join("crop.exr")).unwrap(), im);
+    assert_eq!(image::read_metadata(&dir.join("crop.pfm")).unwrap(), Metadata::default());
+    assert_eq!(image::read_metadata(&dir.join("crop.png")).unwrap(), Metadata::default());
+    // A window that does not hold the image is refused, for every format, and nothing is written.
+    let off = Metadata { window: Some(Window { full: [32, 24], origin: [30, 0] }), attributes: vec![] };
+    for name in ["off.exr", "off.pfm"] {
+        let e = image::write_with(&im, &dir.join(name), &off).unwrap_err();
+        assert!(matches!(e, Error::Usage(_)) && e.to_string().contains("does not fit"), "{e}");
+    }
+    assert_eq!(entries(&dir), vec!["crop.exr", "crop.pfm", "crop.png"]);
+    let e = image::read_metadata(&dir.join("missing.exr")).unwrap_err().to_string();
+    assert!(e.contains("missing.exr") && e.contains("cannot read"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

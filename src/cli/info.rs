@@ -4,9 +4,13 @@
 //! before the first pixel (parameters unused, scene settings a cache-based integrator cannot use, the
 //! shading set-up: an unsupported material rendered as matte, an unreadable environment map, a zero-power
 //! light). For an integrator cachert does not implement (render refuses it), the shading set-up's.
+//!
+//! Given an image (`.exr`, `.pfm` or `.png`, by extension) instead, it describes the file: format, size,
+//! display and data windows, text attributes, and each channel's mean, min and max over its finite values
+//! with the count of non-finite ones (see [`describe_image`]).
 
 use std::fmt::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use crate::error::Result;
 use crate::scene::{LoadOptions, load};
@@ -14,12 +18,15 @@ use crate::scene::{LoadOptions, load};
 /// Flags of `cachert info`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct InfoArgs {
-    /// The pbrt-v3 scene file.
+    /// The pbrt-v3 scene file, or an image (.exr, .pfm, .png) to describe.
     pub scene: PathBuf,
 }
 
 /// Runs `cachert info` and returns the report.
 pub fn run(args: &InfoArgs) -> Result<String> {
+    if let Ok(format) = crate::image::Format::from_path(&args.scene) {
+        return describe_image(&args.scene, format);
+    }
     let mut l = load(&args.scene, LoadOptions::default())?;
     integrator_warnings(&l.scene, l.integrator.as_ref(), &mut l.warnings)?;
     let (s, st) = (&l.scene, &l.stats);
@@ -93,6 +100,55 @@ pub fn run(args: &InfoArgs) -> Result<String> {
         let _ = writeln!(o, "  {w}");
     }
     Ok(o)
+}
+
+/// `cachert info IMAGE`: format, size, windows, text attributes and per-channel statistics of an image.
+pub fn describe_image(path: &Path, format: crate::image::Format) -> Result<String> {
+    let meta = crate::image::read_metadata(path)?;
+    let image = crate::image::read(path)?;
+    let mut o = String::new();
+    let _ = writeln!(o, "image       {}", path.display());
+    let format_name = match format {
+        crate::image::Format::Exr => "EXR",
+        crate::image::Format::Pfm => "PFM",
+        crate::image::Format::Png => "PNG",
+    };
+    let _ = writeln!(o, "format      {format_name}");
+    let _ = writeln!(o, "size        {}x{}", image.width, image.height);
+    if let Some(w) = meta.window {
+        let _ = writeln!(o, "display     (0, 0) .. ({}, {})", w.full[0].saturating_sub(1), w.full[1].saturating_sub(1));
+        let (x1, y1) = (w.origin[0] + image.width - 1, w.origin[1] + image.height - 1);
+        let _ = writeln!(o, "data        ({}, {}) .. ({x1}, {y1})", w.origin[0], w.origin[1]);
+    }
+    let _ = writeln!(o, "attributes  {}", meta.attributes.len());
+    for (name, value) in &meta.attributes {
+        let _ = writeln!(o, "  {name}  {value}");
+    }
+    let _ = writeln!(o, "channel     {:>14}{:>14}{:>14}  (finite values)", "mean", "min", "max");
+    let mut non_finite = 0usize;
+    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+        let (mut sum, mut n, mut lo, mut hi) = (0.0f64, 0usize, f32::INFINITY, f32::NEG_INFINITY);
+        for v in image.pixels.iter().map(|p| p[c]) {
+            if v.is_finite() {
+                (sum, n, lo, hi) = (sum + f64::from(v), n + 1, lo.min(v), hi.max(v));
+            } else {
+                non_finite += 1;
+            }
+        }
+        if n == 0 {
+            let _ = writeln!(o, "  {name:<10}{:>14}{:>14}{:>14}", "-", "-", "-");
+        } else {
+            let mean = sum / n as f64;
+            let _ = writeln!(o, "  {name:<10}{:>14}{:>14}{:>14}", number(mean), number(lo.into()), number(hi.into()));
+        }
+    }
+    let _ = writeln!(o, "non-finite  {non_finite}");
+    Ok(o)
+}
+
+/// A statistic for the table: fixed point for ordinary magnitudes, scientific otherwise.
+fn number(v: f64) -> String {
+    if v == 0.0 || (1e-3..1e6).contains(&v.abs()) { format!("{v:.6}") } else { format!("{v:.4e}") }
 }
 
 /// The warnings `cachert render` adds to loading's for the scene's integrator (and its errors before the

@@ -2,6 +2,7 @@
 //! can call them; `main.rs` only parses flags, prints and maps errors to exit status 2.
 
 pub mod compare;
+pub mod convert;
 pub mod experiment;
 pub mod golden;
 pub mod info;
@@ -21,8 +22,10 @@ pub struct Cli {
 pub enum Command {
     /// Render a pbrt-v3 scene file.
     Render(render::RenderArgs),
-    /// Show what a scene file loads to.
+    /// Show what a scene file loads to, or describe an image (.exr, .pfm, .png).
     Info(info::InfoArgs),
+    /// Convert an image between EXR, PFM and PNG, optionally scaled by 2^STOPS (`--exposure`).
+    Convert(convert::ConvertArgs),
     /// Compare an image with a reference (RMSE, relMSE, HDR-FLIP, LDR-FLIP).
     Compare(compare::CompareArgs),
     /// Time the pbrt-v3 reference scenes against pbrt-v3's own CPU times (`bench micro`: single stages).
@@ -53,6 +56,7 @@ pub fn run(cli: &Cli) -> crate::Result<Done> {
     match &cli.command {
         Command::Render(a) => render::run(a).map(Done::from),
         Command::Info(a) => info::run(a).map(Done::from),
+        Command::Convert(a) => convert::run(a).map(Done::from),
         Command::Compare(a) => compare::run(a).map(Done::from),
         Command::Bench(a) => crate::experiment::bench::run(a).map(Done::from),
         Command::Experiment(a) => experiment::run(a).map(Done::from),

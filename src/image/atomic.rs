@@ -1,6 +1,7 @@
 //! All-or-nothing file writes: the content goes to a hidden temporary file in the target's directory,
 //! which is renamed over the target only after everything was written and flushed. A failure at any point
-//! removes the temporary file, so readers never see a partial image.
+//! removes the temporary file, so readers never see a partial image. [`check_writable`] checks an output
+//! path before the work that fills it starts.
 //!
 //! Depends only on [`crate::error`]; it knows nothing of scenes or rendering.
 
@@ -36,6 +37,34 @@ pub(crate) fn write_atomically(
         let _ = std::fs::remove_file(&tmp);
         Error::file(path, msg)
     })
+}
+
+/// Whether `path` can be written as an image before any work is done: an extension [`super::write`] knows
+/// (`.exr`, `.pfm`, `.png`), a folder that exists, and one that takes a new file (checked by creating and
+/// removing an empty one). Every failure is a usage error naming `path`.
+pub fn check_writable(path: &Path) -> Result<()> {
+    super::Format::from_path(path)?;
+    let folder = match path.parent() {
+        Some(f) if !f.as_os_str().is_empty() => f,
+        _ => Path::new("."),
+    };
+    if !folder.is_dir() {
+        return Err(Error::usage(format!(
+            "\"{}\": the folder \"{}\" does not exist",
+            path.display(),
+            folder.display()
+        )));
+    }
+    let probe = folder.join(format!(".cachert-write-check-{}", std::process::id()));
+    match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+        Ok(_) => {
+            // Best effort: the probe is empty and hidden.
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
+        Err(e) => Err(Error::usage(format!("\"{}\": cannot write in \"{}\": {e}", path.display(), folder.display()))),
+    }
 }
 
 /// `dir/.name.tmp-PID-N` next to `path`.
@@ -95,6 +124,18 @@ mod tests {
         assert!(write_atomically(&target, |_| Err("no".into())).is_err());
         assert_eq!(std::fs::read(&target).unwrap(), b"old");
         assert_eq!(entries(&dir), vec!["a.bin".to_string()]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn check_writable_names_the_problem() {
+        let dir = scratch_dir("check");
+        assert!(check_writable(&dir.join("a.exr")).is_ok());
+        let e = check_writable(&dir.join("a.jpg")).unwrap_err().to_string();
+        assert!(e.contains(".exr, .pfm or .png"), "{e}");
+        let e = check_writable(&dir.join("no/a.png")).unwrap_err().to_string();
+        assert!(e.contains("does not exist") && e.contains("no/a.png"), "{e}");
+        assert!(entries(&dir).is_empty(), "{:?}", entries(&dir));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -3,8 +3,10 @@
 //! Reading takes the first valid layer at its largest resolution level and accepts channels `R`,`G`,`B`
 //! (an `A` or any other extra channel is ignored) or a single `Y` (grey), with half, float or uint
 //! samples, scanline or tiled, any compression the crate knows. Deep data, luminance/chroma images and
-//! other layouts are errors that list the channels found. Writing produces float RGB, ZIP-compressed
-//! scanlines in increasing line order.
+//! other layouts are errors that list the channels found; a data window offset in the display window
+//! (a crop) reads as its own pixels. Writing produces float RGB, ZIP-compressed scanlines in increasing
+//! line order, with the display/data windows and text attributes of a [`Metadata`] (text attributes in
+//! its order, through [`super::exr_header`], so the bytes do not depend on a hash map's order).
 //!
 //! Depends only on the [`Image`] type; it knows nothing of scenes or rendering.
 
@@ -13,7 +15,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use ::exr::prelude::{self as exrs, ReadChannels as _, ReadLayers as _, WritableImage as _};
 
-use super::Image;
+use super::{Image, Metadata, Window};
 
 /// Decodes an EXR file's bytes; the message says what is wrong.
 pub(crate) fn decode(bytes: &[u8]) -> Result<Image, String> {
@@ -77,15 +79,20 @@ const MAX_COMPRESSION: usize = 1100;
 /// Uncompressed bytes allowed beyond the compression bound (tiny files, headers).
 const SIZE_SLACK: usize = 1 << 16;
 
+/// The headers of an EXR file, without its pixels.
+fn headers(bytes: &[u8]) -> Result<exrs::MetaData, String> {
+    let meta = catch_unwind(AssertUnwindSafe(|| exrs::MetaData::read_from_buffered(Cursor::new(bytes), false)));
+    match meta {
+        Ok(Ok(meta)) => Ok(meta),
+        Ok(Err(e)) => Err(format!("cannot decode EXR: {e}")),
+        Err(_) => Err("cannot decode EXR: the header reader failed on this file".into()),
+    }
+}
+
 /// Reads only the headers and refuses sizes the decoder would allocate blindly: a corrupt data window,
 /// tile size or channel list can otherwise ask for tens of gigabytes, which aborts the process.
 fn check_sizes(bytes: &[u8]) -> Result<(), String> {
-    let meta = catch_unwind(AssertUnwindSafe(|| exrs::MetaData::read_from_buffered(Cursor::new(bytes), false)));
-    let meta = match meta {
-        Ok(Ok(meta)) => meta,
-        Ok(Err(e)) => return Err(format!("cannot decode EXR: {e}")),
-        Err(_) => return Err("cannot decode EXR: the header reader failed on this file".into()),
-    };
+    let meta = headers(bytes)?;
     let mut total = 0usize;
     for header in meta.headers.iter() {
         let size = header.layer_size;
@@ -117,8 +124,9 @@ fn check_sizes(bytes: &[u8]) -> Result<(), String> {
     Ok(())
 }
 
-/// Encodes `image` as float RGB, ZIP-compressed scanlines.
-pub(crate) fn encode(image: &Image, out: &mut (impl Write + Seek)) -> Result<(), String> {
+/// Encodes `image` as float RGB, ZIP-compressed scanlines, with `meta`'s window and text attributes. The
+/// window must already be checked to hold the image (as [`super::write_with`] does).
+pub(crate) fn encode(image: &Image, meta: &Metadata, out: &mut (impl Write + Seek)) -> Result<(), String> {
     let channels = exrs::SpecificChannels::rgb(|pos: exrs::Vec2<usize>| {
         let [r, g, b] = image.pixels[pos.y() * image.width + pos.x()];
         (r, g, b)
@@ -128,11 +136,85 @@ pub(crate) fn encode(image: &Image, out: &mut (impl Write + Seek)) -> Result<(),
         blocks: exrs::Blocks::ScanLines,
         line_order: exrs::LineOrder::Increasing,
     };
-    exrs::Image::from_encoded_channels((image.width, image.height), encoding, channels)
-        .write()
-        .non_parallel()
-        .to_buffered(out)
-        .map_err(|e| format!("cannot encode EXR: {e}"))
+    let mut exr_image = exrs::Image::from_encoded_channels((image.width, image.height), encoding, channels);
+    if let Some(w) = meta.window {
+        // pbrt-v3's WriteImageEXR for a crop: display window the whole film, data window the crop.
+        let coordinate = |v: usize| i32::try_from(v).ok().filter(|&v| v < MAX_COORDINATE);
+        let (Some(_), Some(_), Some(ox), Some(oy)) =
+            (coordinate(w.full[0]), coordinate(w.full[1]), coordinate(w.origin[0]), coordinate(w.origin[1]))
+        else {
+            return Err(format!("a {}×{} film is too large for EXR", w.full[0], w.full[1]));
+        };
+        exr_image.attributes.display_window = exrs::IntegerBounds::new((0, 0), (w.full[0], w.full[1]));
+        exr_image.layer_data.attributes.layer_position = exrs::Vec2(ox, oy);
+    }
+    for (i, (name, value)) in meta.attributes.iter().enumerate() {
+        if name.is_empty() || meta.attributes[..i].iter().any(|(n, _)| n == name) {
+            return Err(format!("text attribute name {name:?} is empty or given twice"));
+        }
+        let text = |s: &str| {
+            exrs::Text::new_or_none(s)
+                .ok_or_else(|| format!("text attribute {name:?}: EXR text holds only Latin-1 characters"))
+        };
+        set_text(&mut exr_image.layer_data.attributes, name, text(name)?, text(value)?)?;
+    }
+    if meta.attributes.is_empty() {
+        return exr_image.write().non_parallel().to_buffered(out).map_err(|e| format!("cannot encode EXR: {e}"));
+    }
+    let mut buffer = Cursor::new(Vec::new());
+    exr_image.write().non_parallel().to_buffered(&mut buffer).map_err(|e| format!("cannot encode EXR: {e}"))?;
+    let mut bytes = buffer.into_inner();
+    let names: Vec<String> = meta.attributes.iter().map(|(n, _)| n.clone()).collect();
+    super::exr_header::order_text_attributes(&mut bytes, &names)?;
+    out.write_all(&bytes).map_err(|e| format!("cannot write: {e}"))
+}
+
+/// Window coordinates must stay below this (the `exr` crate's bound, OpenEXR's `INT_MAX / 2`).
+const MAX_COORDINATE: i32 = i32::MAX / 2 - 1;
+
+/// Stores a text attribute: the standard text attributes of OpenEXR in their own fields (the crate
+/// refuses them as custom ones), any other name as a custom `string` attribute, except a name OpenEXR
+/// reserves for an attribute of another type (`dataWindow`, say).
+fn set_text(layer: &mut exrs::LayerAttributes, name: &str, key: exrs::Text, value: exrs::Text) -> Result<(), String> {
+    let field = match name {
+        "name" => &mut layer.layer_name,
+        "owner" => &mut layer.owner,
+        "comments" => &mut layer.comments,
+        "capDate" => &mut layer.capture_date,
+        "software" => &mut layer.software_name,
+        "view" => &mut layer.view_name,
+        "renderingTransform" => &mut layer.rendering_transform_name,
+        "lookModTransform" => &mut layer.look_modification_transform_name,
+        "wrapmodes" => &mut layer.wrap_mode_name,
+        _ if ::exr::meta::header::standard_names::ALL.contains(&name.as_bytes()) => {
+            return Err(format!("text attribute {name:?}: OpenEXR reserves this name for another kind of attribute"));
+        }
+        _ => {
+            layer.other.insert(key, exrs::AttributeValue::Text(value));
+            return Ok(());
+        }
+    };
+    *field = Some(value);
+    Ok(())
+}
+
+/// The display and data windows and the text attributes of an EXR file's first header.
+pub(crate) fn metadata(bytes: &[u8]) -> Result<Metadata, String> {
+    let meta = headers(bytes)?;
+    let header = meta.headers.first().ok_or("EXR file without a header")?;
+    let window = window_of(header.shared_attributes.display_window, header.data_window());
+    Ok(Metadata { window, attributes: super::exr_header::text_attributes(bytes)? })
+}
+
+/// Where the data window sits in the display window; `None` when they are the same, or when the data
+/// window starts left of or above the display window (which a film crop never does).
+fn window_of(display: exrs::IntegerBounds, data: exrs::IntegerBounds) -> Option<Window> {
+    if display == data {
+        return None;
+    }
+    let offset = |d: i32, s: i32| usize::try_from(i64::from(d) - i64::from(s)).ok();
+    let origin = [offset(data.position.x(), display.position.x())?, offset(data.position.y(), display.position.y())?];
+    Some(Window { full: [display.size.x(), display.size.y()], origin })
 }
 
 #[cfg(test)]
@@ -151,13 +233,66 @@ mod tests {
 
     fn encoded(im: &Image) -> Vec<u8> {
         let mut c = Cursor::new(Vec::new());
-        encode(im, &mut c).unwrap();
+        encode(im, &Metadata::default(), &mut c).unwrap();
         c.into_inner()
     }
 
     #[test]
     fn round_trip_is_exact() {
         assert_eq!(decode(&encoded(&sample())).unwrap(), sample());
+    }
+
+    fn encoded_with(im: &Image, meta: &Metadata) -> Vec<u8> {
+        let mut c = Cursor::new(Vec::new());
+        encode(im, meta, &mut c).unwrap();
+        c.into_inner()
+    }
+
+    fn crop_meta() -> Metadata {
+        let attributes =
+            [("renderer", "cachert"), ("software", "x 1.0"), ("zeta", "last"), ("alpha", "café"), ("b", "")];
+        Metadata {
+            window: Some(Window { full: [20, 10], origin: [7, 4] }),
+            attributes: attributes.iter().map(|(n, v)| (n.to_string(), v.to_string())).collect(),
+        }
+    }
+
+    #[test]
+    fn window_and_text_round_trip_in_order() {
+        let bytes = encoded_with(&sample(), &crop_meta());
+        assert_eq!(metadata(&bytes).unwrap(), crop_meta());
+        // The pixels are the data window's, as before.
+        assert_eq!(decode(&bytes).unwrap(), sample());
+        let header = exrs::MetaData::read_from_buffered(Cursor::new(&bytes), false).unwrap();
+        let h = &header.headers[0];
+        assert_eq!(h.shared_attributes.display_window, exrs::IntegerBounds::new((0, 0), (20, 10)));
+        assert_eq!(h.data_window(), exrs::IntegerBounds::new((7, 4), (5, 3)));
+    }
+
+    #[test]
+    fn text_attributes_do_not_depend_on_hash_order() {
+        let first = encoded_with(&sample(), &crop_meta());
+        for _ in 0..8 {
+            assert_eq!(encoded_with(&sample(), &crop_meta()), first);
+        }
+    }
+
+    #[test]
+    fn default_metadata_reads_back_as_default() {
+        assert_eq!(metadata(&encoded(&sample())).unwrap(), Metadata::default());
+        let whole = Metadata { window: Some(Window { full: [5, 3], origin: [0, 0] }), attributes: vec![] };
+        assert_eq!(encoded_with(&sample(), &whole), encoded(&sample()));
+    }
+
+    #[test]
+    fn bad_text_attributes_are_errors() {
+        let mut c = Cursor::new(Vec::new());
+        let twice = Metadata { window: None, attributes: vec![("a".into(), "1".into()), ("a".into(), "2".into())] };
+        assert!(encode(&sample(), &twice, &mut c).unwrap_err().contains("twice"));
+        let wide = Metadata { window: None, attributes: vec![("a".into(), "→".into())] };
+        assert!(encode(&sample(), &wide, &mut c).unwrap_err().contains("Latin-1"));
+        let reserved = Metadata { window: None, attributes: vec![("dataWindow".into(), "x".into())] };
+        assert!(encode(&sample(), &reserved, &mut c).unwrap_err().contains("reserves"), "dataWindow");
     }
 
     /// Writes `samples` as channels of a 2×2 image with the given encoding, through the crate.

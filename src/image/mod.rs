@@ -8,12 +8,16 @@
 //! Writes go to a temporary file in the target directory that is renamed at the end, so a failed write
 //! never leaves a partial file.
 //!
+//! EXR files also carry a [`Metadata`]: where the image sits in a larger film (a [`Window`], as pbrt-v3
+//! writes a crop) and text attributes; [`write_with`] writes them and [`read_metadata`] reads them back.
+//!
 //! Every problem with a file is an [`Error::file`] naming it; no input file makes the readers panic.
 //!
 //! This module depends only on [`crate::error`]; it knows nothing of scenes, rendering or metrics.
 
 mod atomic;
 mod exr;
+mod exr_header;
 mod pfm;
 mod png;
 
@@ -21,6 +25,7 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 
+pub use atomic::check_writable;
 pub use png::{linear_to_srgb, png_bytes, rgb8_png_bytes, srgb_to_linear, write_rgb8_png};
 
 /// Linear f32 RGB, row-major, top row first.
@@ -155,8 +160,39 @@ pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
 
 /// Writes an image by extension: `.exr` (float RGB, scanline, ZIP), `.pfm` (float32 `PF`, little-endian,
 /// rows bottom to top like pbrt-v3) or `.png` (8-bit sRGB, clamped to [0, 1]). The file appears only
-/// when complete; an unknown extension is a usage error naming the allowed ones.
+/// when complete; an unknown extension is a usage error naming the allowed ones. The same as
+/// [`write_with`] with [`Metadata::default`], byte for byte.
 pub fn write(image: &Image, path: &Path) -> Result<()> {
+    write_with(image, path, &Metadata::default())
+}
+
+/// Where an image sits in a larger film: pbrt-v3 writes a cropped render as an EXR whose display window is the full film and whose data window is the crop.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Window {
+    /// full film size [width, height] in pixels
+    pub full: [usize; 2],
+    /// top-left pixel of the image within the film
+    pub origin: [usize; 2],
+}
+
+/// What an image file records beside its pixels (EXR keeps all of it; PFM and PNG drop it).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Metadata {
+    /// Where the image sits in a larger film; `None` for an image that is the whole film. Reading gives
+    /// `None` when the data window is the display window.
+    pub window: Option<Window>,
+    /// text attributes, name → value, in order
+    pub attributes: Vec<(String, String)>,
+}
+
+/// Writes `image` to `path` (format from the extension, atomically, as `write` does) with `meta`.
+///
+/// EXR: the display window is (0,0)..(full-1) and the data window origin..origin+size-1, as pbrt-v3's
+/// `WriteImageEXR` does for a crop window; the text attributes become `string` attributes in their order
+/// (OpenEXR's standard text attributes such as `owner` or `software` go in their own places; names must be
+/// distinct, Latin-1, and not reserved for another kind of attribute). A window that does not hold the
+/// image is a usage error, for every format.
+pub fn write_with(image: &Image, path: &Path, meta: &Metadata) -> Result<()> {
     let format = Format::from_path(path)?;
     if image.width == 0 || image.height == 0 || image.pixels.len() != image.width * image.height {
         return Err(Error::file(
@@ -164,11 +200,38 @@ pub fn write(image: &Image, path: &Path) -> Result<()> {
             format!("cannot write a {}×{} image with {} pixels", image.width, image.height, image.pixels.len()),
         ));
     }
+    if let Some(w) = meta.window {
+        let fits = |axis: usize, size: usize| w.origin[axis].checked_add(size).is_some_and(|end| end <= w.full[axis]);
+        if !fits(0, image.width) || !fits(1, image.height) {
+            return Err(Error::usage(format!(
+                "\"{}\": a {}×{} image at ({}, {}) does not fit in a {}×{} film",
+                path.display(),
+                image.width,
+                image.height,
+                w.origin[0],
+                w.origin[1],
+                w.full[0],
+                w.full[1]
+            )));
+        }
+    }
     atomic::write_atomically(path, |out| match format {
-        Format::Exr => exr::encode(image, out),
+        Format::Exr => exr::encode(image, meta, out),
         Format::Pfm => pfm::encode(image, out),
         Format::Png => png::encode(image, out),
     })
+}
+
+/// Reads the metadata of an image file (EXR: display/data window and every text attribute; PFM/PNG: the default).
+pub fn read_metadata(path: &Path) -> Result<Metadata> {
+    let format = Format::from_path(path)?;
+    if format != Format::Exr {
+        // Nothing to read, but a missing or unreadable file is still an error.
+        std::fs::File::open(path).map_err(|e| Error::file(path, format!("cannot read: {e}")))?;
+        return Ok(Metadata::default());
+    }
+    let bytes = std::fs::read(path).map_err(|e| Error::file(path, format!("cannot read: {e}")))?;
+    exr::metadata(&bytes).map_err(|msg| Error::file(path, msg))
 }
 
 #[cfg(test)]
