@@ -231,3 +231,36 @@ fn one_render_writes_every_outfile_it_is_given() {
     assert_eq!(o.status.code(), Some(2));
     assert!(!exr.exists());
 }
+
+#[test]
+fn an_exr_records_its_crop_and_how_it_was_made() {
+    let dir = TempDir::new("first-hour-exr-header");
+    let file = dir.write("scene.pbrt", common::lit_plane("Integrator \"directlighting\""));
+    let exr = dir.path("a.exr");
+    let render = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_cachert"))
+            .arg("render")
+            .arg(&file)
+            .args(["--outfile", exr.to_str().unwrap(), "--seed", "3"])
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        cachert::image::read_metadata(&exr).unwrap()
+    };
+    // pbrt-v3's crop: the display window is the whole 8×8 film, the data window the crop (2..6 × 2..8).
+    let meta = render(&["--crop", "0.25,0.75,0.25,1"]);
+    assert_eq!(meta.window, Some(cachert::image::Window { full: [8, 8], origin: [2, 2] }));
+    let attr =
+        |m: &cachert::image::Metadata, k: &str| m.attributes.iter().find(|(n, _)| n == k).map(|(_, v)| v.clone());
+    assert_eq!(attr(&meta, "integrator").as_deref(), Some("directlighting"));
+    assert_eq!(attr(&meta, "seed").as_deref(), Some("3"));
+    assert!(attr(&meta, "renderTimeSeconds").is_some() && attr(&meta, "cachertCommit").is_some(), "{meta:?}");
+    // A cache render adds its placement and cache count; `cachert info` prints them.
+    let meta = render(&["--integrator", "cacheao", "--placement", "im", "--caches", "6", "--set", "gather=4"]);
+    assert_eq!(meta.window, None);
+    assert_eq!((attr(&meta, "placement").as_deref(), attr(&meta, "caches").as_deref()), (Some("im"), Some("6")));
+    let info = Command::new(env!("CARGO_BIN_EXE_cachert")).arg("info").arg(&exr).output().unwrap();
+    let info = String::from_utf8_lossy(&info.stdout);
+    assert!(info.contains("placement  im") && info.contains("integrator  cacheao"), "{info}");
+}

@@ -82,7 +82,7 @@ fn a_gaussian_filter_with_a_cache_integrator_and_its_preparation() {
          Integrator \"irradiancecache\" \"integer caches\" [8] \"integer gather\" [4] \"integer maxdepth\" [0]",
         "",
     );
-    check("filter", &text, &["PixelFilter is not used by cache-based integrators", "\"maxdepth\" 0"]);
+    check("filter", &text, &["PixelFilter is not used by the cached part of the image", "\"maxdepth\" 0"]);
 }
 
 #[test]

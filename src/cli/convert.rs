@@ -31,7 +31,7 @@ pub fn run(args: &ConvertArgs) -> Result<String> {
             args.exposure
         )));
     }
-    image::check_writable(&args.output)?;
+    image::check_output("OUT", &args.output, true)?;
     let mut picture = image::read(&args.input)?;
     let is_exr = |p: &Path| Format::from_path(p).ok() == Some(Format::Exr);
     let meta = if is_exr(&args.input) && is_exr(&args.output) {

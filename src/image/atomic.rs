@@ -1,6 +1,6 @@
 //! All-or-nothing file writes: the content goes to a hidden temporary file in the target's directory,
 //! which is renamed over the target only after everything was written and flushed. A failure at any point
-//! removes the temporary file, so readers never see a partial image. [`check_writable`] checks an output
+//! removes the temporary file, so readers never see a partial image. [`check_output`] checks an output
 //! path before the work that fills it starts.
 //!
 //! Depends only on [`crate::error`]; it knows nothing of scenes or rendering.
@@ -39,18 +39,21 @@ pub(crate) fn write_atomically(
     })
 }
 
-/// Whether `path` can be written as an image before any work is done: an extension [`super::write`] knows
-/// (`.exr`, `.pfm`, `.png`), a folder that exists, and one that takes a new file (checked by creating and
-/// removing an empty one). Every failure is a usage error naming `path`.
-pub fn check_writable(path: &Path) -> Result<()> {
-    super::Format::from_path(path)?;
+/// Whether `path` can be written as the output `what` names (a flag such as `--outfile`, or `OUT`) before
+/// any work is done: an extension [`super::write`] knows (`.exr`, `.pfm`, `.png`) when it is an `image`, a
+/// folder that exists, and one that takes a new file (checked by creating and removing an empty one). Every
+/// failure is a usage error naming `what` and `path`.
+pub fn check_output(what: &str, path: &Path, image: bool) -> Result<()> {
+    if image {
+        super::Format::from_path(path).map_err(|e| Error::usage(format!("{what}: {e}")))?;
+    }
     let folder = match path.parent() {
         Some(f) if !f.as_os_str().is_empty() => f,
         _ => Path::new("."),
     };
     if !folder.is_dir() {
         return Err(Error::usage(format!(
-            "\"{}\": the folder \"{}\" does not exist",
+            "{what} {}: the folder \"{}\" does not exist",
             path.display(),
             folder.display()
         )));
@@ -63,7 +66,9 @@ pub fn check_writable(path: &Path) -> Result<()> {
             Ok(())
         }
         Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
-        Err(e) => Err(Error::usage(format!("\"{}\": cannot write in \"{}\": {e}", path.display(), folder.display()))),
+        Err(e) => {
+            Err(Error::usage(format!("{what} {}: cannot write in \"{}\": {e}", path.display(), folder.display())))
+        }
     }
 }
 
@@ -128,12 +133,13 @@ mod tests {
     }
 
     #[test]
-    fn check_writable_names_the_problem() {
+    fn check_output_names_the_problem() {
         let dir = scratch_dir("check");
-        assert!(check_writable(&dir.join("a.exr")).is_ok());
-        let e = check_writable(&dir.join("a.jpg")).unwrap_err().to_string();
-        assert!(e.contains(".exr, .pfm or .png"), "{e}");
-        let e = check_writable(&dir.join("no/a.png")).unwrap_err().to_string();
+        assert!(check_output("OUT", &dir.join("a.exr"), true).is_ok());
+        assert!(check_output("--stats", &dir.join("a.json"), false).is_ok());
+        let e = check_output("OUT", &dir.join("a.jpg"), true).unwrap_err().to_string();
+        assert!(e.contains(".exr, .pfm or .png") && e.starts_with("OUT"), "{e}");
+        let e = check_output("OUT", &dir.join("no/a.png"), true).unwrap_err().to_string();
         assert!(e.contains("does not exist") && e.contains("no/a.png"), "{e}");
         assert!(entries(&dir).is_empty(), "{:?}", entries(&dir));
         std::fs::remove_dir_all(&dir).unwrap();

@@ -25,7 +25,7 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 
-pub use atomic::check_writable;
+pub use atomic::check_output;
 pub use png::{linear_to_srgb, png_bytes, rgb8_png_bytes, srgb_to_linear, write_rgb8_png};
 
 /// Linear f32 RGB, row-major, top row first.

@@ -12,7 +12,9 @@ use std::path::{Path, PathBuf};
 
 use crate::application::registry;
 use crate::error::{Error, Result, Warnings};
+use crate::image::{Metadata, Window};
 use crate::integrator::{RenderOutput, RenderSettings, render};
+use crate::scene::film::FilmSpec;
 use crate::scene::{LoadOptions, LoadStats, load};
 
 /// Files a job writes.
@@ -75,7 +77,7 @@ impl RenderJob {
         let cache = cache.into_iter().filter_map(|(f, p, image)| Some((f, p.as_ref()?, image)));
         for (flag, path, image) in named.chain(cache) {
             if path != Path::new("-") {
-                check_output(flag, path, image)?;
+                crate::image::check_output(flag, path, image)?;
             }
         }
         let loaded = load(&self.scene, self.load)?;
@@ -83,11 +85,12 @@ impl RenderJob {
         let image_paths = self.image_paths(&loaded.scene.film.filename);
         if o.images.is_empty() {
             for p in &image_paths {
-                check_output("Film \"filename\"", p, true)?;
+                crate::image::check_output("Film \"filename\"", p, true)?;
             }
         }
         let output = render(&loaded.scene, loaded.integrator.as_ref(), &self.settings, warnings)?;
-        self.write(&output, &image_paths)?;
+        let meta = self.metadata(&loaded.scene.film, &output);
+        self.write(&output, &image_paths, &meta)?;
         Ok(Finished { image_paths, output, load: loaded.stats })
     }
 
@@ -103,8 +106,41 @@ impl RenderJob {
         vec![PathBuf::from(stem).with_extension("exr")]
     }
 
+    /// What an EXR image records beside its pixels: where a cropped image sits in the film (pbrt-v3's data
+    /// window) and the `--stats` essentials — integrator, placement, caches, seed, samples, render time,
+    /// cachert's version and commit — for `cachert info IMAGE.exr`. The render time makes two files of the
+    /// same render differ in their headers; their pixels are the same, bit for bit.
+    fn metadata(&self, film: &FilmSpec, output: &RenderOutput) -> Metadata {
+        let b = film.cropped_bounds();
+        let full = film.resolution.map(|r| r as usize);
+        let origin = b.min.map(|m| m.max(0) as usize);
+        let cropped = origin != [0, 0] || [output.image.width, output.image.height] != full;
+        let window = cropped.then_some(Window { full, origin });
+        let s = &self.settings;
+        // A cache render names itself "cacheao, placement vgc+dgs": the placement has its own attribute.
+        let integrator = output.integrator.split_once(", placement").map_or(&*output.integrator, |(name, _)| name);
+        let mut a: Vec<(&str, String)> =
+            vec![("scene", self.scene.display().to_string()), ("integrator", integrator.to_string())];
+        let cache = output.cache.as_deref();
+        if let Some(c) = cache {
+            let placement = c.settings.get("placement").and_then(|p| p.as_str()).unwrap_or("");
+            a.push(("placement", placement.to_string()));
+            a.push(("caches", c.stats.total_caches.to_string()));
+        }
+        a.push(("seed", s.seed.to_string()));
+        a.push(("samplesPerPixel", output.spp.to_string()));
+        if !s.set.is_empty() {
+            a.push(("set", s.set.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" ")));
+        }
+        let secs = cache.map_or(output.render_secs, |c| c.stats.times.total);
+        a.push(("renderTimeSeconds", format!("{secs:.3}")));
+        a.push(("cachertVersion", env!("CARGO_PKG_VERSION").to_string()));
+        a.push(("cachertCommit", crate::provenance::of_this_build().commit()));
+        Metadata { window, attributes: a.into_iter().map(|(k, v)| (k.to_string(), v)).collect() }
+    }
+
     /// Writes the images and the cache outputs, checking every requested output before writing any.
-    fn write(&self, result: &RenderOutput, image_paths: &[PathBuf]) -> Result<()> {
+    fn write(&self, result: &RenderOutput, image_paths: &[PathBuf], meta: &Metadata) -> Result<()> {
         let o = &self.outputs;
         let cache = result.cache.as_deref();
         if (o.overlay.is_some() || o.dmap.is_some() || o.stats.is_some()) && cache.is_none() {
@@ -122,7 +158,7 @@ impl RenderJob {
             crate::image::Format::from_path(p)?;
         }
         for p in image_paths {
-            crate::image::write(&result.image, p)?;
+            crate::image::write_with(&result.image, p, meta)?;
         }
         if let Some(c) = cache {
             if let Some(p) = &o.overlay {
@@ -195,36 +231,6 @@ impl RenderJob {
             a.push(p.display().to_string());
         }
         a
-    }
-}
-
-/// Whether `path` can be written as the output `what` names: an image format this writer knows (`image`),
-/// a folder that exists, and one that takes a new file (checked by creating and removing an empty one).
-fn check_output(what: &str, path: &Path, image: bool) -> Result<()> {
-    if image {
-        crate::image::Format::from_path(path).map_err(|e| Error::usage(format!("{what}: {e}")))?;
-    }
-    let folder = match path.parent() {
-        Some(f) if !f.as_os_str().is_empty() => f,
-        _ => Path::new("."),
-    };
-    if !folder.is_dir() {
-        return Err(Error::usage(format!(
-            "{what} {}: the folder \"{}\" does not exist",
-            path.display(),
-            folder.display()
-        )));
-    }
-    let probe = folder.join(format!(".cachert-write-check-{}", std::process::id()));
-    match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
-        Ok(_) => {
-            let _ = std::fs::remove_file(&probe);
-            Ok(())
-        }
-        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
-        Err(e) => {
-            Err(Error::usage(format!("{what} {}: cannot write in \"{}\": {e}", path.display(), folder.display())))
-        }
     }
 }
 

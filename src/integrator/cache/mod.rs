@@ -213,27 +213,31 @@ fn cache_sample_settings(
         Some((n, _)) => o.subpixels = Some(n),
         None => {}
     }
-    // A per-pixel term renders with the scene's Sampler and PixelFilter: only the cached part leaves them
-    // out. Both facts are one note, at the first of the two lines.
-    if !per_pixel_term {
-        let box_filter = scene.filter.kind == filter::FilterKind::Box && scene.filter.radius == [0.5, 0.5];
-        let sampler = scene.declared.sampler.as_ref().map(|l| (l, format!("Sampler \"{}\"", scene.sampler.name)));
-        let filter = scene.declared.filter.as_ref().filter(|_| !box_filter);
-        let unused = match (sampler, filter) {
-            (Some((l, s)), Some(f)) => Some((l, format!("{s} and PixelFilter (line {}) are", f.line))),
-            (Some((l, s)), None) => Some((l, format!("{s} is"))),
-            (None, Some(f)) => Some((f, "PixelFilter is".to_string())),
-            (None, None) => None,
+    // A per-pixel term (irradiance caching's `output full`) renders with the scene's Sampler and
+    // PixelFilter: only the cached part leaves them out. Both facts are one note, at the first of the two
+    // lines.
+    let box_filter = scene.filter.kind == filter::FilterKind::Box && scene.filter.radius == [0.5, 0.5];
+    let sampler = scene.declared.sampler.as_ref().map(|l| (l, format!("Sampler \"{}\"", scene.sampler.name)));
+    let filter = scene.declared.filter.as_ref().filter(|_| !box_filter);
+    let unused = match (sampler, filter) {
+        (Some((l, s)), Some(f)) => Some((l, format!("{s} and PixelFilter (line {}) are", f.line))),
+        (Some((l, s)), None) => Some((l, format!("{s} is"))),
+        (None, Some(f)) => Some((f, "PixelFilter is".to_string())),
+        (None, None) => None,
+    };
+    if let Some((loc, what)) = unused {
+        let whom = if per_pixel_term {
+            "the cached part of the image (its per-pixel part uses them)"
+        } else {
+            "cache-based integrators"
         };
-        if let Some((loc, what)) = unused {
-            warnings.note_at(
-                loc,
-                format!(
-                    "{what} not used by cache-based integrators: they shade \"subpixels\" jittered positions per \
-                     pixel (set it, or --spp) and average them (a box filter of radius 0.5)"
-                ),
-            );
-        }
+        warnings.note_at(
+            loc,
+            format!(
+                "{what} not used by {whom}: the caches are shaded at \"subpixels\" jittered positions per pixel \
+                 (set it, or --spp), averaged (a box filter of radius 0.5)"
+            ),
+        );
     }
     o
 }
