@@ -117,7 +117,7 @@ impl RenderJob {
         let cropped = origin != [0, 0] || [output.image.width, output.image.height] != full;
         let window = cropped.then_some(Window { full, origin });
         let s = &self.settings;
-        // A cache render names itself "cacheao, placement vgc+dgs": the placement has its own attribute.
+        // A cache render names itself "<application>, placement <name>": the placement has its own attribute.
         let integrator = output.integrator.split_once(", placement").map_or(&*output.integrator, |(name, _)| name);
         let mut a: Vec<(&str, String)> =
             vec![("scene", self.scene.display().to_string()), ("integrator", integrator.to_string())];
