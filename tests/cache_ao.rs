@@ -11,7 +11,8 @@ use cachert::integrator::{RenderOutput, RenderSettings, render};
 use cachert::scene::{LoadOptions, load, load_str};
 
 /// Every placement name, plus the per-sample reference.
-const PLACEMENTS: [&str; 9] = ["none", "im", "sd", "sd+as", "vgc", "vgc+dgs", "vgc+as", "vgc+dgs:diff", "vgc+dgs:geom"];
+const PLACEMENTS: [&str; 10] =
+    ["none", "im", "sd", "sd+as", "vgc", "vgc+dgs", "vgc+as", "vgc+dgs:diff", "vgc+dgs:geom", "refine"];
 
 fn run(scene: &str, set: &[(&str, &str)], threads: Option<usize>) -> cachert::Result<RenderOutput> {
     let loaded = load_str(scene, Path::new("inline.pbrt"), LoadOptions::default())?;

@@ -24,7 +24,8 @@ use cachert::metrics::rmse;
 use cachert::scene::{LoadOptions, LoadedScene, load, load_str};
 
 /// Every placement name, the per-sample reference first.
-const PLACEMENTS: [&str; 9] = ["none", "im", "sd", "sd+as", "vgc", "vgc+dgs", "vgc+as", "vgc+dgs:diff", "vgc+dgs:geom"];
+const PLACEMENTS: [&str; 10] =
+    ["none", "im", "sd", "sd+as", "vgc", "vgc+dgs", "vgc+as", "vgc+dgs:diff", "vgc+dgs:geom", "refine"];
 
 /// Albedo and emitted radiance of the furnace sphere.
 const RHO: f64 = 0.5;

@@ -9,13 +9,14 @@
 use plotters::style::RGBColor;
 
 /// The fixed colours of known methods (Okabe–Ito first, for the placements readers compare most).
-pub const KNOWN: [(&str, RGBColor); 14] = [
+pub const KNOWN: [(&str, RGBColor); 15] = [
     ("per-pixel", RGBColor(0, 0, 0)),
     ("im", RGBColor(213, 94, 0)),
     ("sd", RGBColor(0, 114, 178)),
     ("sd+as", RGBColor(0, 158, 115)),
     ("vgc", RGBColor(204, 121, 167)),
     ("vgc+dgs", RGBColor(230, 159, 0)),
+    ("refine", RGBColor(0, 90, 90)),
     ("vgc+as", RGBColor(86, 180, 233)),
     ("vgc+dgs:diff", RGBColor(160, 40, 40)),
     ("vgc+dgs:geom", RGBColor(40, 40, 160)),

@@ -14,8 +14,8 @@ use super::spec::CONVERGED;
 use super::summary::{self, Summary, errors, is_cache_run, ok, pairs, total};
 use super::tables::Table;
 
-/// The order of the ratio table's columns: the paper's methods; any other placement follows by name.
-const METHODS: [&str; 7] = ["sd", "sd+as", "vgc", "vgc+as", "vgc+dgs", "vgc+dgs:diff", "vgc+dgs:geom"];
+/// The order of the ratio table's columns: the paper's methods and refine; any other placement follows by name.
+const METHODS: [&str; 8] = ["sd", "sd+as", "vgc", "vgc+as", "vgc+dgs", "refine", "vgc+dgs:diff", "vgc+dgs:geom"];
 
 /// Per scene, application and budget: IM's mean RMSE and HDR-FLIP, and each other plain cache method's as a
 /// ratio to them, marked `+` (clearly lower than IM) or `-` (clearly higher) by the two-standard-error rule.

@@ -45,7 +45,7 @@ pub struct Discontinuity {
 }
 
 /// Position and normal of every evaluated cache (NaN for a site that is not usable, which the index skips).
-fn cache_points(g: &GBuffer, oracle: &dyn CacheOracle) -> Vec<(Vec3A, Vec3A)> {
+pub(super) fn cache_points(g: &GBuffer, oracle: &dyn CacheOracle) -> Vec<(Vec3A, Vec3A)> {
     (0..oracle.len() as CacheId)
         .map(|c| {
             g.get(oracle.site(c))
@@ -63,14 +63,19 @@ struct Band {
     ids: Vec<u32>,
     off: Vec<u32>,
     pairs: Vec<u64>,
+    /// With `sites` given: per pixel of the band, the image-space distance to the nearest cache it selects
+    /// (infinite when it selects none or is unusable).
+    gap: Vec<f32>,
 }
 
-fn gather_band(g: &GBuffer, index: &CacheIndex, rows: std::ops::Range<usize>) -> Band {
+/// Gathers a band's neighbour sets; with `sites` (each cache's pixel, by id) also each pixel's gap.
+fn gather_band(g: &GBuffer, index: &CacheIndex, rows: std::ops::Range<usize>, sites: Option<&[PixelId]>) -> Band {
     let k = index.lookup().keep;
     let (y0, nrows) = (rows.start, rows.len());
     // Per pixel of the band: its selection (sorted ids, padded with u32::MAX), found tile by tile.
     let mut sel = vec![u32::MAX; g.width * nrows * k];
     let mut lens = vec![0usize; g.width * nrows];
+    let mut gap = if sites.is_some() { vec![f32::INFINITY; g.width * nrows] } else { Vec::new() };
     let mut queries = Vec::with_capacity(TILE * TILE);
     let mut where_ = Vec::with_capacity(TILE * TILE);
     let mut scratch = GroupScratch::default();
@@ -88,6 +93,18 @@ fn gather_band(g: &GBuffer, index: &CacheIndex, rows: std::ops::Range<usize>) ->
             }
             index.select_group_in(&queries, &mut scratch, |i, near| {
                 let at = where_[i];
+                if let Some(sites) = sites {
+                    let (x, y) = ((at % g.width) as f32, (y0 + at / g.width) as f32);
+                    gap[at] = near
+                        .iter()
+                        .filter_map(|nb| sites.get(nb.id as usize))
+                        .map(|&s| {
+                            let (sx, sy) = ((s as usize % g.width) as f32, (s as usize / g.width) as f32);
+                            (sx - x).powi(2) + (sy - y).powi(2)
+                        })
+                        .fold(f32::INFINITY, f32::min)
+                        .sqrt();
+                }
                 let slot = &mut sel[at * k..(at + 1) * k];
                 for (s, nb) in slot.iter_mut().zip(near) {
                     *s = nb.id;
@@ -97,7 +114,7 @@ fn gather_band(g: &GBuffer, index: &CacheIndex, rows: std::ops::Range<usize>) ->
             });
         }
     }
-    let mut b = Band { off: vec![0], ..Default::default() };
+    let mut b = Band { off: vec![0], gap, ..Default::default() };
     for y in 0..nrows {
         let mut prev: Option<u32> = None;
         for x in 0..g.width {
@@ -157,9 +174,22 @@ impl PairTable {
 /// Diff_avg and Diff_max per pixel (ALGORITHMS.md §4.5.3, all unordered pairs of the K caches, A10). Every
 /// distinct pair over the whole image is evaluated in one `diff_many` call.
 fn diff_terms(g: &GBuffer, index: &CacheIndex, oracle: &dyn CacheOracle) -> (Vec<f32>, Vec<f32>) {
+    let (avg, max, _) = diff_and_gap_terms(g, index, oracle, false);
+    (avg, max)
+}
+
+/// [`diff_terms`] and, when `want_gap`, each pixel's image-space distance to the nearest cache its §5
+/// selection keeps (infinite where it keeps none; empty when not wanted) — from the same selections.
+pub(super) fn diff_and_gap_terms(
+    g: &GBuffer,
+    index: &CacheIndex,
+    oracle: &dyn CacheOracle,
+    want_gap: bool,
+) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
+    let sites: Option<Vec<PixelId>> = want_gap.then(|| (0..oracle.len() as CacheId).map(|c| oracle.site(c)).collect());
     let bands: Vec<Band> = (0..g.height.div_ceil(BAND))
         .into_par_iter()
-        .map(|i| gather_band(g, index, i * BAND..((i + 1) * BAND).min(g.height)))
+        .map(|i| gather_band(g, index, i * BAND..((i + 1) * BAND).min(g.height), sites.as_deref()))
         .collect();
     let mut pairs: Vec<u64> = bands.iter().flat_map(|b| b.pairs.iter().copied()).collect();
     pairs.par_sort_unstable();
@@ -185,7 +215,8 @@ fn diff_terms(g: &GBuffer, index: &CacheIndex, oracle: &dyn CacheOracle) -> (Vec
         avg.extend(a);
         max.extend(m);
     }
-    (avg, max)
+    let gap = if want_gap { bands.into_iter().flat_map(|b| b.gap).collect() } else { Vec::new() };
+    (avg, max, gap)
 }
 
 /// Per-pixel (Diff_avg, Diff_max) of one band from its sets (K < 2 ⇒ 0).
@@ -210,7 +241,7 @@ fn band_terms(b: &Band, table: &PairTable) -> (Vec<f32>, Vec<f32>) {
 
 /// G(s) = Σ_{q in the window, q usable, q ≠ s} (1 − n_s·n_q) (Eq. 3); 0 for unusable pixels. Rows in
 /// parallel; unusable pixels carry a zero normal and weight 0.
-fn geometry_term(g: &GBuffer, window: usize) -> Vec<f32> {
+pub(super) fn geometry_term(g: &GBuffer, window: usize) -> Vec<f32> {
     let r = window.max(1) / 2;
     let (w, h) = (g.width, g.height);
     let normals: Vec<(Vec3A, f32)> = g
@@ -241,7 +272,7 @@ fn geometry_term(g: &GBuffer, window: usize) -> Vec<f32> {
 }
 
 /// Min–max normalisation to [0, 1] over the pixels where `mask` is set (A11); 0 when max = min.
-fn normalise(v: &mut [f32], mask: &[bool]) {
+pub(super) fn normalise(v: &mut [f32], mask: &[bool]) {
     let (lo, hi) = v
         .iter()
         .zip(mask)
@@ -294,11 +325,25 @@ pub(crate) fn discontinuity_map(
 /// when the map runs out, the rest are uniform among free usable pixels. Returns the pixels and a note when
 /// fewer could be placed.
 fn draw(g: &GBuffer, map: &[f32], taken: &mut [bool], budget: usize, seed: u64) -> (Vec<PixelId>, Vec<String>) {
+    draw_tagged(g, map, taken, budget, seed, [STAGE_DRAW, STAGE_FALLBACK])
+}
+
+/// [`draw`] with the stream tags of the draws and of the uniform fallback given (`[draw, fallback]`), so a
+/// strategy that draws from maps in several rounds keeps each round's streams apart.
+pub(super) fn draw_tagged(
+    g: &GBuffer,
+    map: &[f32],
+    taken: &mut [bool],
+    budget: usize,
+    seed: u64,
+    tags: [u64; 2],
+) -> (Vec<PixelId>, Vec<String>) {
+    let [draw_tag, fallback_tag] = tags;
     let mut table = Discrete2D::new(g.width, g.height, map);
     let mut out = Vec::with_capacity(budget);
     let mut notes = Vec::new();
     for i in 0..budget {
-        let mut rng = Rng::keyed(seed, STAGE_DRAW, i as u64);
+        let mut rng = Rng::keyed(seed, draw_tag, i as u64);
         let Some((x, y)) = table.sample(rng.uniform(), rng.uniform()) else { break };
         table.remove(x, y);
         let id = g.id(x, y);
@@ -307,7 +352,7 @@ fn draw(g: &GBuffer, map: &[f32], taken: &mut [bool], budget: usize, seed: u64) 
     }
     if out.len() < budget {
         let mut free = free_usable(g, taken);
-        let rest = pick_uniform(&mut free, budget - out.len(), seed, STAGE_FALLBACK);
+        let rest = pick_uniform(&mut free, budget - out.len(), seed, fallback_tag);
         if out.is_empty() {
             notes.push("the discontinuity map is zero everywhere: new caches are uniformly random".to_string());
         }

@@ -13,6 +13,7 @@
 //! | [`view_guided`] | VGC, the paper's first stage, Eq. 1–2 with a σ_s search (§4.4) |
 //! | [`adaptive`] | AS, neighbour-error insertion after SD or VGC (§4.3, a reconstruction) |
 //! | [`discontinuity`] | DGS, the paper's second stage, Eq. 3–4 (§4.5) |
+//! | [`refine`] | refine's rounds of map-guided insertion after IM (beyond the paper; experiments/notes/refine.md) |
 //! | [`registry`] | the strategy names |
 //! | [`synthetic`] | analytic G-buffers and a mock oracle, for tests and `cachert bench micro` |
 //! | `points`, `split`, `hierarchy`, `search`, `cluster`, `budget`, `discrete2d` | shared machinery: usable points and Eq. 1 scaling, node splits, the build-once hierarchy and its cut, the log-scale budget search, representatives and exact budgets, common budget cases, the 2-D sampler |
@@ -24,6 +25,7 @@
 pub mod adaptive;
 pub mod discontinuity;
 pub mod image_uniform;
+pub mod refine;
 pub mod registry;
 pub mod spatial_directional;
 pub mod synthetic;
@@ -42,6 +44,7 @@ mod test_scenes;
 pub use adaptive::AdaptiveSampling;
 pub use discontinuity::Discontinuity;
 pub use image_uniform::ImageUniform;
+pub use refine::Refine;
 pub use spatial_directional::SpatialDirectional;
 pub use view_guided::ViewGuided;
 
@@ -205,6 +208,12 @@ pub struct PlacementParams {
     pub dgs: DgsTerms,
     /// DGS geometry window (odd side length; 5 in the paper).
     pub dgs_window: usize,
+    /// refine: the share of the budget its rounds add after the uniform first stage.
+    pub refine_share: f32,
+    /// refine: rounds of insertion.
+    pub refine_rounds: u32,
+    /// refine: the uniform floor added to each round's map, as a fraction of the map's mean.
+    pub refine_floor: f32,
 }
 
 impl Default for PlacementParams {
@@ -221,6 +230,9 @@ impl Default for PlacementParams {
             lookup: LookupParams::default(),
             dgs: DgsTerms { diff: true, geometry: true },
             dgs_window: 5,
+            refine_share: 0.8,
+            refine_rounds: 4,
+            refine_floor: 0.1,
         }
     }
 }

@@ -6,8 +6,8 @@
 use crate::error::{Error, Result};
 
 use super::{
-    AdaptivePlacement, AdaptiveSampling, DgsTerms, Discontinuity, ImageUniform, InitialPlacement, SpatialDirectional,
-    ViewGuided,
+    AdaptivePlacement, AdaptiveSampling, DgsTerms, Discontinuity, ImageUniform, InitialPlacement, PlacementParams,
+    Refine, SpatialDirectional, ViewGuided,
 };
 
 /// A placement strategy: a first stage and, for two-stage strategies, a second.
@@ -21,9 +21,23 @@ pub struct Strategy {
     pub adaptive: Option<Box<dyn AdaptivePlacement>>,
 }
 
+impl Strategy {
+    /// The first stage's share of a total budget: all of it for one-stage strategies, `1 − ratio` for the
+    /// paper's two-stage ones, `1 − refine_share` for `refine`; at least one cache.
+    pub fn first_stage_budget(&self, total: usize, p: &PlacementParams) -> usize {
+        let share = match (&self.adaptive, self.name) {
+            (None, _) => return total,
+            (Some(_), "refine") => p.refine_share,
+            (Some(_), _) => p.ratio,
+        };
+        (((1.0 - share as f64) * total as f64).round() as usize).clamp(1, total.max(1))
+    }
+}
+
 /// Every strategy name, in the order reports list them. `none` (the per-sample reference) is handled by
 /// the render driver, not here.
-pub const NAMES: [&str; 8] = ["im", "sd", "sd+as", "vgc", "vgc+dgs", "vgc+as", "vgc+dgs:diff", "vgc+dgs:geom"];
+pub const NAMES: [&str; 9] =
+    ["im", "sd", "sd+as", "vgc", "vgc+dgs", "refine", "vgc+as", "vgc+dgs:diff", "vgc+dgs:geom"];
 
 /// Looks a strategy up by name; an unknown name is an error listing the valid ones.
 ///
@@ -37,6 +51,7 @@ pub const NAMES: [&str; 8] = ["im", "sd", "sd+as", "vgc", "vgc+dgs", "vgc+as", "
 /// | `vgc+as` | VGC | AS (Table 2 ablation) |
 /// | `vgc+dgs:diff` | VGC | DGS with Diff_avg′ + Diff_max′ only (Table 2 "DGS (diff)") |
 /// | `vgc+dgs:geom` | VGC | DGS with G′ only (Table 2 "DGS (geom)") |
+/// | `refine` | IM with `1 − refine_share` of the budget | rounds of map-guided insertion (beyond the paper) |
 ///
 /// For two-stage strategies VGC is told its budget is the first-stage share, so σ_a follows the total.
 pub fn strategy(name: &str) -> Result<Strategy> {
@@ -47,6 +62,7 @@ pub fn strategy(name: &str) -> Result<Strategy> {
         "sd+as" => (Box::new(SpatialDirectional), Some(Box::new(AdaptiveSampling))),
         "vgc" => (Box::new(ViewGuided { two_stage: false }), None),
         "vgc+dgs" => (Box::new(ViewGuided { two_stage: true }), Some(dgs(None))),
+        "refine" => (Box::new(ImageUniform), Some(Box::new(Refine))),
         "vgc+as" => (Box::new(ViewGuided { two_stage: true }), Some(Box::new(AdaptiveSampling))),
         "vgc+dgs:diff" => {
             (Box::new(ViewGuided { two_stage: true }), Some(dgs(Some(DgsTerms { diff: true, geometry: false }))))
@@ -76,7 +92,7 @@ mod tests {
         for name in NAMES {
             let s = strategy(name).unwrap();
             assert_eq!(s.name, name);
-            assert_eq!(s.adaptive.is_some(), name.contains('+'), "{name}");
+            assert_eq!(s.adaptive.is_some(), name.contains('+') || name == "refine", "{name}");
         }
         let e = strategy("vgc+foo").unwrap_err().to_string();
         assert!(e.contains("vgc+foo") && NAMES.iter().all(|n| e.contains(n)), "{e}");
@@ -89,8 +105,7 @@ mod tests {
         let total = 900usize;
         for name in NAMES {
             let s = strategy(name).unwrap();
-            let n1 =
-                if s.adaptive.is_some() { ((1.0 - p.ratio as f64) * total as f64).round() as usize } else { total };
+            let n1 = s.first_stage_budget(total, &p);
             let s1 = s.initial.place(&g, n1, &p, 4).unwrap();
             assert_eq!(s1.sites.len(), n1, "{name}");
             let mut oracle = MaskOracle::new(&g, &s1.sites);

@@ -257,10 +257,7 @@ fn place<A: Application>(
     stats: &mut CacheStats,
 ) -> Result<Option<Vec<f32>>> {
     let g = store.g;
-    let n1 = match strategy.adaptive {
-        Some(_) => (((1.0 - s.params.ratio as f64) * total as f64).round() as usize).clamp(1, total),
-        None => total,
-    };
+    let n1 = strategy.first_stage_budget(total, &s.params);
     let t = Instant::now();
     let first = strategy.initial.place(g, n1, &s.params, s.seed)?;
     times.initial_generation = t.elapsed().as_secs_f64();

@@ -18,7 +18,7 @@ use crate::parse::integrator::{Choice, IntegratorParams, ParamDef, Parameter, Va
 pub const PLACEMENT: ParamDef<String> = ParamDef::text(
     "placement",
     "vgc+dgs",
-    "`none` (per-sample reference), `im`, `sd`, `sd+as`, `vgc`, `vgc+dgs`, `vgc+as`, `vgc+dgs:diff`, `vgc+dgs:geom`",
+    "`none` (per-sample reference), `im`, `sd`, `sd+as`, `vgc`, `vgc+dgs`, `refine`, `vgc+as`, `vgc+dgs:diff`, `vgc+dgs:geom`",
 );
 /// `caches`: the budget N_c (default from the application's paper budget and the image's pixels).
 pub const CACHES: ParamDef<i64> = ParamDef::computed(
@@ -30,6 +30,20 @@ pub const CACHES: ParamDef<i64> = ParamDef::computed(
 /// `ratio`: R.
 pub const RATIO: ParamDef<f64> = ParamDef::float("ratio", 0.15, "stage-2 share R of two-stage strategies")
     .valid(Valid::Below { lo: 0.0, below: 1.0 });
+/// `refineshare`: refine's share of the budget added in rounds.
+pub const REFINE_SHARE: ParamDef<f64> =
+    ParamDef::float("refineshare", 0.8, "refine: share of the budget added in rounds after its uniform first stage")
+        .valid(Valid::Below { lo: 0.0, below: 1.0 });
+/// `refinerounds`: refine's rounds.
+pub const REFINE_ROUNDS: ParamDef<i64> =
+    ParamDef::int("refinerounds", 4, "refine: rounds of insertion, each from a fresh map").between(1, 64);
+/// `refinefloor`: refine's uniform floor.
+pub const REFINE_FLOOR: ParamDef<f64> = ParamDef::float(
+    "refinefloor",
+    0.1,
+    "refine: uniform floor added to each round's map, as a fraction of the map's mean",
+)
+.valid(Valid::AtLeast { lo: 0.0, finite: true });
 /// `sigma_a`: VGC's σ_a (default from the cache density, chosen by the strategy).
 pub const SIGMA_A: ParamDef<f64> = ParamDef::computed(
     "sigma_a",
@@ -75,6 +89,9 @@ pub const PARAMETERS: &[Parameter] = &[
     PLACEMENT.row,
     CACHES.row,
     RATIO.row,
+    REFINE_SHARE.row,
+    REFINE_ROUNDS.row,
+    REFINE_FLOOR.row,
     SIGMA_A.row,
     GAMMA.row,
     METERS_PER_UNIT.row,
@@ -212,6 +229,9 @@ impl CacheSettings {
             jitter: p.get(&JITTER)? as f32,
             angular,
             sd_min_size: p.get(&SD_MIN_SIZE)? as usize,
+            refine_share: p.get(&REFINE_SHARE)? as f32,
+            refine_rounds: p.get(&REFINE_ROUNDS)? as u32,
+            refine_floor: p.get(&REFINE_FLOOR)? as f32,
             ..Default::default()
         };
         params.lookup.candidates = candidates;
@@ -234,10 +254,13 @@ impl CacheSettings {
             AngularMode::Cone => "cone",
             AngularMode::SphericalAngles => "spherical",
         };
-        let pairs: [(&str, serde_json::Value); 15] = [
+        let pairs: [(&str, serde_json::Value); 18] = [
             ("placement", self.placement.name().into()),
             ("caches", self.caches.into()),
             ("ratio", json_f32(p.ratio)),
+            ("refineshare", json_f32(p.refine_share)),
+            ("refinerounds", p.refine_rounds.into()),
+            ("refinefloor", json_f32(p.refine_floor)),
             ("sigma_a", p.sigma_a_deg.map(json_f32).into()),
             ("gamma", json_f32(p.gamma)),
             ("meters_per_unit", json_f32(p.meters_per_unit)),

@@ -1,0 +1,197 @@
+//! STAGE 4, second stage of **refine** (beyond the paper; ALGORITHMS.md §4.6): after an image-space
+//! uniform first stage (IM with `1 − refine_share` of the budget), the rest is added in rounds, each drawn
+//! from a fresh map of the caches placed so far: where the caches a pixel would blend disagree
+//! (Diff_avg), where the normals change (G), and where the nearest cache the pixel's §5 selection keeps is
+//! far away in the image (the coverage term), over a small uniform floor. Every round sees the caches of
+//! the rounds before it, so refinement follows the error that remains rather than the error one map
+//! predicted, and no pixel is left far from a cache it can use (the gaps that made the clustered
+//! placements lose to IM, experiments/notes/stability.md).
+//!
+//! Depends on `gbuffer`, `cache` (the §5 selection), the DGS terms and draws of [`super::discontinuity`] and
+//! `sampling`; sees cache records only through [`CacheOracle::diff_many`]. Never depends on `render`,
+//! `scene` or an application.
+
+use rayon::prelude::*;
+
+use super::discontinuity::{cache_points, diff_and_gap_terms, draw_tagged, geometry_term};
+use super::points::usable_normal;
+use super::{AdaptiveInfo, AdaptivePlacement, CacheId, CacheOracle, PlacementParams, Stage1};
+use crate::cache::CacheIndex;
+use crate::error::Result;
+use crate::gbuffer::GBuffer;
+
+/// Stream tags of refine's random decisions; the round number is added to each.
+const STAGE_DRAW: u64 = 0x5246_0100;
+const STAGE_FALLBACK: u64 = 0x5246_0200;
+
+/// Refine's second stage: rounds of map-guided insertion.
+///
+/// | option | type | default | meaning |
+/// |---|---|---|---|
+/// | `PlacementParams::refine_share` | f32 | 0.8 | the share of the budget the rounds add (the driver gives IM the rest) |
+/// | `PlacementParams::refine_rounds` | u32 | 4 | rounds; the share is split evenly over them |
+/// | `PlacementParams::refine_floor` | f32 | 0.1 | uniform floor, as a fraction of the map's mean over free usable pixels |
+/// | `PlacementParams::dgs` | DgsTerms | both | whether the map has the difference and the geometry terms (importance caching omits G, as for DGS) |
+///
+/// A round's map, on every usable pixel without a cache, is
+/// `Diff_avg / mean(Diff_avg) + G / mean(G) + 2 · min((gap / h)², 16)` plus the floor, where Diff_avg is
+/// DGS's mean difference of the caches the pixel's §5 selection blends (ALGORITHMS.md §4.5.3), G is Eq. 3,
+/// gap is the image-space distance to the nearest cache that selection keeps (a pixel that keeps none counts
+/// 16) and h = sqrt(usable pixels / caches) is the mean cache spacing. Unlike DGS's min–max normalisation,
+/// dividing by the mean keeps each term's contrast: a scene whose caches disagree everywhere (sibenik's
+/// carvings) gets near-uniform rounds, one whose disagreement sits on a few edges (the staircase's steps)
+/// gets concentrated ones. Diff_max is left out: it peaks on single noisy pairs. The weights were chosen on
+/// the cache-AO cells of the stability map at 160×90 (4 seeds), experiments/notes/refine.md.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Refine;
+
+impl AdaptivePlacement for Refine {
+    fn place(
+        &self,
+        g: &GBuffer,
+        _stage1: &Stage1,
+        oracle: &mut dyn CacheOracle,
+        budget: usize,
+        params: &PlacementParams,
+        seed: u64,
+    ) -> Result<AdaptiveInfo> {
+        super::budget::check_gbuffer(g)?;
+        if budget == 0 {
+            return Ok(AdaptiveInfo::default());
+        }
+        let rounds = params.refine_rounds.max(1) as usize;
+        let mut taken = vec![false; g.width * g.height];
+        let mut info = AdaptiveInfo::default();
+        for r in 0..rounds {
+            for c in 0..oracle.len() as CacheId {
+                if let Some(t) = taken.get_mut(oracle.site(c) as usize) {
+                    *t = true;
+                }
+            }
+            // Round r's share of the budget: the rounding leaves the sum exactly `budget`.
+            let n = budget * (r + 1) / rounds - budget * r / rounds;
+            if n == 0 {
+                continue;
+            }
+            let map = round_map(g, oracle, params, &taken);
+            let tags = [STAGE_DRAW + r as u64, STAGE_FALLBACK + r as u64];
+            let (sites, notes) = draw_tagged(g, &map, &mut taken, n, seed, tags);
+            info.notes.extend(notes);
+            if sites.is_empty() {
+                break;
+            }
+            info.added += sites.len();
+            info.rounds += 1;
+            oracle.evaluate(&sites);
+            info.discontinuity = Some(map);
+        }
+        info.notes.dedup();
+        Ok(info)
+    }
+}
+
+/// Gap terms above this (in squared spacings) count as this: a pixel that selects no cache at all.
+const GAP_CAP: f32 = 16.0;
+
+/// Weight of the coverage term against the mean-1 difference and geometry terms.
+const GAP_WEIGHT: f32 = 2.0;
+
+/// One round's map (see [`Refine`]); 0 on caches and unusable pixels.
+fn round_map(g: &GBuffer, oracle: &dyn CacheOracle, params: &PlacementParams, taken: &[bool]) -> Vec<f32> {
+    let mask: Vec<bool> = g.points.par_iter().map(|sp| sp.as_ref().and_then(usable_normal).is_some()).collect();
+    let mut d = vec![0f32; g.width * g.height];
+    if !oracle.is_empty() {
+        let caches = cache_points(g, oracle);
+        let l = g.scale;
+        let lambda = params.lambda_for(if l.is_finite() && l > 0.0 { l } else { 1.0 });
+        let index = CacheIndex::new(&caches, params.lookup, lambda).with_scale(l);
+        let (mut avg, _, gap) = diff_and_gap_terms(g, &index, oracle, true);
+        if params.dgs.diff && oracle.len() >= 2 {
+            relative(&mut avg, &mask);
+            d.par_iter_mut().zip(&avg).for_each(|(d, a)| *d += a);
+        }
+        let usable = mask.iter().filter(|m| **m).count();
+        let spacing = (usable as f32 / oracle.len() as f32).sqrt().max(1.0);
+        d.par_iter_mut().zip(&gap).for_each(|(d, &gp)| *d += GAP_WEIGHT * ((gp / spacing).powi(2)).min(GAP_CAP));
+    }
+    if params.dgs.geometry {
+        let mut geo = geometry_term(g, params.dgs_window);
+        relative(&mut geo, &mask);
+        d.par_iter_mut().zip(&geo).for_each(|(d, x)| *d += x);
+    }
+    add_floor(g, &mut d, taken, params.refine_floor);
+    d
+}
+
+/// Divides by the mean over the masked pixels (0 where unmasked or when the mean is 0): the term keeps its
+/// contrast and has mean 1.
+fn relative(v: &mut [f32], mask: &[bool]) {
+    let (sum, n) = v
+        .iter()
+        .zip(mask)
+        .filter(|(x, m)| **m && x.is_finite())
+        .fold((0f64, 0usize), |(s, n), (&x, _)| (s + x as f64, n + 1));
+    let mean = if n > 0 { (sum / n as f64) as f32 } else { 0.0 };
+    v.par_iter_mut().zip(mask).for_each(|(x, &m)| *x = if m && mean > 0.0 && x.is_finite() { *x / mean } else { 0.0 });
+}
+
+/// Adds `floor × mean(map)` to every free usable pixel (the map is already 0 on caches and unusable pixels);
+/// a map that is 0 everywhere becomes uniform over the free usable pixels.
+fn add_floor(g: &GBuffer, map: &mut [f32], taken: &[bool], floor: f32) {
+    let free: Vec<bool> =
+        (0..map.len()).into_par_iter().map(|i| !taken[i] && super::points::is_usable(g, i as u32)).collect();
+    let (sum, count) =
+        map.iter().zip(&free).filter(|(_, f)| **f).fold((0f64, 0usize), |(s, n), (&v, _)| (s + v as f64, n + 1));
+    let mean = if count > 0 { (sum / count as f64) as f32 } else { 0.0 };
+    let add = if mean > 0.0 { floor.max(0.0) * mean } else { 1.0 };
+    map.par_iter_mut().zip(&free).for_each(|(v, &f)| *v = if f { *v + add } else { 0.0 });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::placement::ImageUniform;
+    use crate::placement::test_scenes as ts;
+
+    #[test]
+    fn refine_meets_the_contract() {
+        ts::check_adaptive(&Refine, &ImageUniform, true);
+    }
+
+    #[test]
+    fn the_floor_makes_a_zero_map_uniform_and_keeps_caches_out() {
+        let g = ts::flat(16, 8);
+        let mut taken = vec![false; 16 * 8];
+        taken[5] = true;
+        let mut map = vec![0f32; 16 * 8];
+        add_floor(&g, &mut map, &taken, 0.5);
+        assert_eq!(map[5], 0.0);
+        assert!((0..map.len()).filter(|&i| i != 5 && g.points[i].is_some()).all(|i| map[i] == 1.0));
+        let mut map: Vec<f32> = (0..16 * 8).map(|i| (i % 3) as f32).collect();
+        map[5] = 0.0;
+        add_floor(&g, &mut map, &taken, 0.5);
+        assert_eq!(map[5], 0.0);
+        // Mean of the free pixels' i mod 3 is about 1: every free pixel gains about 0.5.
+        assert!(map.iter().enumerate().all(|(i, &v)| i == 5 || g.points[i].is_none() || v >= 0.45));
+    }
+
+    #[test]
+    fn the_rounds_fill_a_region_the_first_stage_left_empty() {
+        // Caches on the left half of a flat plane only: the coverage term sends most new caches right,
+        // though the plane's AO is the same everywhere (no difference or geometry term to follow).
+        let g = ts::plane(96, 64);
+        let left: Vec<u32> = (0..g.points.len() as u32)
+            .filter(|&i| {
+                (i as usize % 96) < 48 && (i as usize / 96).is_multiple_of(4) && (i as usize).is_multiple_of(4)
+            })
+            .filter(|&i| crate::placement::points::is_usable(&g, i))
+            .collect();
+        let mut oracle = ts::MaskOracle::new(&g, &left);
+        let p = PlacementParams::default();
+        let s1 = Stage1 { sites: left.clone(), ..Default::default() };
+        let info = Refine.place(&g, &s1, &mut oracle, 200, &p, 3).unwrap();
+        assert_eq!(info.added, 200);
+        let right = oracle.sites[left.len()..].iter().filter(|&&id| id as usize % 96 >= 48).count();
+        assert!(right > 150, "only {right} of 200 new caches went to the empty half");
+    }
+}
