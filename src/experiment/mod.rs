@@ -16,6 +16,7 @@
 use std::path::Path;
 
 pub mod bench;
+pub mod beyond;
 pub mod chart;
 pub mod figures;
 pub mod jobs;

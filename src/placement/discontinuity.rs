@@ -68,10 +68,26 @@ struct Band {
     gap: Vec<f32>,
 }
 
-/// Gathers a band's neighbour sets; with `sites` (each cache's pixel, by id) also each pixel's gap.
-fn gather_band(g: &GBuffer, index: &CacheIndex, rows: std::ops::Range<usize>, sites: Option<&[PixelId]>) -> Band {
+/// Gathers a band's neighbour sets; with `sites` (each cache's pixel, by id) also each pixel's gap. With
+/// `stride` s > 1 only the pixels whose x and y are multiples of s are looked up, and every other pixel takes
+/// the set (and gap) of the grid pixel at or above-left of it — unless that one is unusable, when it is
+/// looked up itself. `BAND` must be a multiple of s; s = 1 looks every pixel up.
+fn gather_band(
+    g: &GBuffer,
+    index: &CacheIndex,
+    rows: std::ops::Range<usize>,
+    sites: Option<&[PixelId]>,
+    stride: usize,
+) -> Band {
     let k = index.lookup().keep;
     let (y0, nrows) = (rows.start, rows.len());
+    let stride = stride.max(1);
+    // The grid pixel (band-relative) whose set pixel (x, y) takes.
+    let source = |x: usize, y: usize| (x - x % stride, y - (y0 + y) % stride);
+    let looked_up = |x: usize, y: usize| {
+        let (sx, sy) = source(x, y);
+        (sx, sy) == (x, y) || !where_valid(g, sx, y0 + sy)
+    };
     // Per pixel of the band: its selection (sorted ids, padded with u32::MAX), found tile by tile.
     let mut sel = vec![u32::MAX; g.width * nrows * k];
     let mut lens = vec![0usize; g.width * nrows];
@@ -85,6 +101,9 @@ fn gather_band(g: &GBuffer, index: &CacheIndex, rows: std::ops::Range<usize>, si
             where_.clear();
             for y in ty..(ty + TILE).min(nrows) {
                 for x in tx..(tx + TILE).min(g.width) {
+                    if stride > 1 && !looked_up(x, y) {
+                        continue;
+                    }
                     if let Some(q) = g.get(g.id(x, y0 + y)).and_then(|sp| usable_normal(sp).map(|n| (sp.p, n))) {
                         queries.push(q);
                         where_.push(y * g.width + x);
@@ -124,7 +143,17 @@ fn gather_band(g: &GBuffer, index: &CacheIndex, rows: std::ops::Range<usize>, si
                 prev = None;
                 continue;
             }
-            let set = &sel[at * k..at * k + lens[at]];
+            let from = if stride > 1 && !looked_up(x, y) {
+                let (sx, sy) = source(x, y);
+                let from = sy * g.width + sx;
+                if let Some(v) = b.gap.get(from).copied() {
+                    b.gap[at] = v;
+                }
+                from
+            } else {
+                at
+            };
+            let set = &sel[from * k..from * k + lens[from]];
             // Neighbouring pixels usually blend the same caches: reuse the previous pixel's set.
             if let Some(s) = prev.filter(|&s| &b.ids[b.off[s as usize] as usize..b.off[s as usize + 1] as usize] == set)
             {
@@ -174,22 +203,24 @@ impl PairTable {
 /// Diff_avg and Diff_max per pixel (ALGORITHMS.md §4.5.3, all unordered pairs of the K caches, A10). Every
 /// distinct pair over the whole image is evaluated in one `diff_many` call.
 fn diff_terms(g: &GBuffer, index: &CacheIndex, oracle: &dyn CacheOracle) -> (Vec<f32>, Vec<f32>) {
-    let (avg, max, _) = diff_and_gap_terms(g, index, oracle, false);
+    let (avg, max, _) = diff_and_gap_terms(g, index, oracle, false, 1);
     (avg, max)
 }
 
 /// [`diff_terms`] and, when `want_gap`, each pixel's image-space distance to the nearest cache its §5
-/// selection keeps (infinite where it keeps none; empty when not wanted) — from the same selections.
+/// selection keeps (infinite where it keeps none; empty when not wanted) — from the same selections, made on
+/// a grid of every `stride`-th pixel in x and y (1 or 2; see `gather_band`).
 pub(super) fn diff_and_gap_terms(
     g: &GBuffer,
     index: &CacheIndex,
     oracle: &dyn CacheOracle,
     want_gap: bool,
+    stride: usize,
 ) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
     let sites: Option<Vec<PixelId>> = want_gap.then(|| (0..oracle.len() as CacheId).map(|c| oracle.site(c)).collect());
     let bands: Vec<Band> = (0..g.height.div_ceil(BAND))
         .into_par_iter()
-        .map(|i| gather_band(g, index, i * BAND..((i + 1) * BAND).min(g.height), sites.as_deref()))
+        .map(|i| gather_band(g, index, i * BAND..((i + 1) * BAND).min(g.height), sites.as_deref(), stride))
         .collect();
     let mut pairs: Vec<u64> = bands.iter().flat_map(|b| b.pairs.iter().copied()).collect();
     pairs.par_sort_unstable();

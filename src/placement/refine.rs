@@ -62,6 +62,7 @@ impl AdaptivePlacement for Refine {
         let rounds = params.refine_rounds.max(1) as usize;
         let mut taken = vec![false; g.width * g.height];
         let mut info = AdaptiveInfo::default();
+        let fixed = Fixed::new(g, params);
         for r in 0..rounds {
             for c in 0..oracle.len() as CacheId {
                 if let Some(t) = taken.get_mut(oracle.site(c) as usize) {
@@ -73,7 +74,7 @@ impl AdaptivePlacement for Refine {
             if n == 0 {
                 continue;
             }
-            let map = round_map(g, oracle, params, &taken);
+            let map = round_map(g, oracle, params, &taken, &fixed);
             let tags = [STAGE_DRAW + r as u64, STAGE_FALLBACK + r as u64];
             let (sites, notes) = draw_tagged(g, &map, &mut taken, n, seed, tags);
             info.notes.extend(notes);
@@ -95,32 +96,64 @@ const GAP_CAP: f32 = 16.0;
 
 /// Weight of the coverage term against the mean-1 difference and geometry terms.
 const GAP_WEIGHT: f32 = 2.0;
+/// The difference term is (Diff_avg / mean)^3, divided by its mean again: the contrast of a cube sends the
+/// rounds to where the caches disagree most (the squared error of an interpolated value grows faster than
+/// the disagreement that predicts it); 1 and 2 were behind on the Cornell box and the staircase.
+const DIFF_POWER: i32 = 3;
+/// The map's selections are made on every second pixel in x and y (the others take their grid pixel's), which
+/// halves what a round costs at no measurable loss (experiments/notes/refine.md).
+const STRIDE: usize = 2;
 
 /// One round's map (see [`Refine`]); 0 on caches and unusable pixels.
-fn round_map(g: &GBuffer, oracle: &dyn CacheOracle, params: &PlacementParams, taken: &[bool]) -> Vec<f32> {
-    let mask: Vec<bool> = g.points.par_iter().map(|sp| sp.as_ref().and_then(usable_normal).is_some()).collect();
+fn round_map(
+    g: &GBuffer,
+    oracle: &dyn CacheOracle,
+    params: &PlacementParams,
+    taken: &[bool],
+    fixed: &Fixed,
+) -> Vec<f32> {
+    let mask = &fixed.mask;
     let mut d = vec![0f32; g.width * g.height];
     if !oracle.is_empty() {
         let caches = cache_points(g, oracle);
         let l = g.scale;
         let lambda = params.lambda_for(if l.is_finite() && l > 0.0 { l } else { 1.0 });
         let index = CacheIndex::new(&caches, params.lookup, lambda).with_scale(l);
-        let (mut avg, _, gap) = diff_and_gap_terms(g, &index, oracle, true);
+        let (mut avg, _, gap) = diff_and_gap_terms(g, &index, oracle, true, STRIDE);
         if params.dgs.diff && oracle.len() >= 2 {
-            relative(&mut avg, &mask);
+            relative(&mut avg, mask);
+            avg.par_iter_mut().for_each(|a| *a = a.powi(DIFF_POWER));
+            relative(&mut avg, mask);
             d.par_iter_mut().zip(&avg).for_each(|(d, a)| *d += a);
         }
         let usable = mask.iter().filter(|m| **m).count();
         let spacing = (usable as f32 / oracle.len() as f32).sqrt().max(1.0);
         d.par_iter_mut().zip(&gap).for_each(|(d, &gp)| *d += GAP_WEIGHT * ((gp / spacing).powi(2)).min(GAP_CAP));
     }
-    if params.dgs.geometry {
-        let mut geo = geometry_term(g, params.dgs_window);
-        relative(&mut geo, &mask);
-        d.par_iter_mut().zip(&geo).for_each(|(d, x)| *d += x);
+    if let Some(geo) = &fixed.geometry {
+        d.par_iter_mut().zip(geo).for_each(|(d, x)| *d += x);
     }
     add_floor(g, &mut d, taken, params.refine_floor);
     d
+}
+
+/// What every round's map shares: the usable pixels and the geometry term G / mean(G) (None when the map
+/// leaves G out), which depend on the G-buffer alone and are computed once.
+struct Fixed {
+    mask: Vec<bool>,
+    geometry: Option<Vec<f32>>,
+}
+
+impl Fixed {
+    fn new(g: &GBuffer, params: &PlacementParams) -> Self {
+        let mask: Vec<bool> = g.points.par_iter().map(|sp| sp.as_ref().and_then(usable_normal).is_some()).collect();
+        let geometry = params.dgs.geometry.then(|| {
+            let mut geo = geometry_term(g, params.dgs_window);
+            relative(&mut geo, &mask);
+            geo
+        });
+        Fixed { mask, geometry }
+    }
 }
 
 /// Divides by the mean over the masked pixels (0 where unmasked or when the mean is 0): the term keeps its
