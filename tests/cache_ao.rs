@@ -121,8 +121,13 @@ fn budgets_are_exact_and_split_by_the_stage_two_share() {
         sites.sort_unstable();
         sites.dedup();
         assert_eq!(sites.len(), 500, "{p}: two caches on one pixel");
-        let two_stage = p.contains('+');
-        assert_eq!(c.stage2.len(), if two_stage { 75 } else { 0 }, "{p}");
+        // The paper's two-stage strategies give stage 2 `ratio` (0.15) of the budget, refine `refineshare` (0.8).
+        let stage2 = match *p {
+            "refine" => 400,
+            p if p.contains('+') => 75,
+            _ => 0,
+        };
+        assert_eq!(c.stage2.len(), stage2, "{p}");
     }
 }
 

@@ -49,7 +49,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub integrator: Option<String>,
     /// Cache-based integrators: the placement strategy (the parameter "placement"): none, im, sd, sd+as,
-    /// vgc, vgc+dgs, vgc+as, vgc+dgs:diff, vgc+dgs:geom.
+    /// vgc, vgc+dgs, refine, vgc+as, vgc+dgs:diff, vgc+dgs:geom.
     #[arg(long, value_parser = parse_placement)]
     pub placement: Option<Placement>,
     /// Cache-based integrators: the total cache budget (the parameter "caches").

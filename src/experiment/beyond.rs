@@ -107,7 +107,7 @@ mod tests {
     fn rec(placement: &str, seed: u64, rmse: f64, flip: f64) -> Record {
         Record {
             scene: "s".into(),
-            application: "cacheao".into(),
+            application: "app".into(),
             placement: placement.into(),
             method: placement.into(),
             caches: 100,
