@@ -65,12 +65,13 @@ impl AdaptivePlacement for Refine {
         let mut taken = vec![false; g.width * g.height];
         let mut info = AdaptiveInfo::default();
         let fixed = Fixed::new(g, params);
-        for r in 0..rounds {
-            for c in 0..oracle.len() as CacheId {
-                if let Some(t) = taken.get_mut(oracle.site(c) as usize) {
-                    *t = true;
-                }
+        // The first stage's caches; each round's draws mark their own.
+        for c in 0..oracle.len() as CacheId {
+            if let Some(t) = taken.get_mut(oracle.site(c) as usize) {
+                *t = true;
             }
+        }
+        for r in 0..rounds {
             // Round r's share of the budget: the rounding leaves the sum exactly `budget`.
             let n = budget * (r + 1) / rounds - budget * r / rounds;
             if n == 0 {
@@ -103,7 +104,7 @@ const GAP_WEIGHT: f32 = 2.0;
 /// the disagreement that predicts it); 1 and 2 were behind on the Cornell box and the staircase.
 const DIFF_POWER: i32 = 3;
 /// The map's selections are made on every second pixel in x and y (the others take their grid pixel's), which
-/// halves what a round costs at no measurable loss (experiments/notes/refine.md).
+/// halves what a round costs for 1–2 % of RMSE (experiments/results/refine-tuning/MANIFEST.md).
 const STRIDE: usize = 2;
 
 /// One round's map (see [`Refine`]); 0 on caches and unusable pixels.
