@@ -111,7 +111,7 @@ fn toy(placement: Placement, caches: usize, set: &[(&str, &str)]) -> RenderOutpu
     let settings = RenderSettings {
         seed: 5,
         set: set.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
-        cache: CacheOverrides { placement: Some(placement), caches: Some(caches), subpixels: None },
+        cache: CacheOverrides { placement: Some(placement), caches: Some(caches), subpixels: None, target_error: None },
         ..Default::default()
     };
     render_with::<NormalZ>(&loaded.scene, loaded.integrator.as_ref(), &settings, &mut Warnings::default()).unwrap()

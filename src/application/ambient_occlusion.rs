@@ -185,6 +185,18 @@ impl Application for CacheAo {
         [if wsum > 0.0 { sum / wsum } else { 0.0 }; 3]
     }
 
+    /// The blend of the others' AO against the cache's own (shading draws nothing).
+    fn predict(
+        &self,
+        _: &&Scene,
+        _: &ShadingPoint,
+        own: &VisibilityRecord,
+        near: &[Neighbour<'_, VisibilityRecord>],
+    ) -> Option<([f32; 3], [f32; 3])> {
+        let wsum: f32 = near.iter().map(|c| c.weight).sum();
+        (wsum > 0.0).then(|| ([near.iter().map(|c| c.weight * c.record.ao).sum::<f32>() / wsum; 3], [own.ao; 3]))
+    }
+
     fn reference(&self, scene: &&Scene, s: &ShadingPoint, _: &mut Rng, _: Stratum, rays: &mut RayCounters) -> [f32; 3] {
         [self.gather(scene, s, rays).ao; 3]
     }

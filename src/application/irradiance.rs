@@ -441,6 +441,20 @@ impl Application for IrradianceCache {
         (self.reflectance(cx, s) * e / wsum).to_array()
     }
 
+    /// Shading draws nothing: the blend of the others against the cache alone, reflectance included.
+    fn predict(
+        &self,
+        cx: &Lit<'_>,
+        at: &ShadingPoint,
+        own: &IrradianceRecord,
+        near: &[Neighbour<'_, IrradianceRecord>],
+    ) -> Option<([f32; 3], [f32; 3])> {
+        let (mut rng, stratum, mut rays) = (Rng::new(0), Stratum::new(0, 0, 0, 1), RayCounters::default());
+        let alone = [Neighbour { record: own, p: at.p, n: at.n, weight: 1.0 }];
+        let own = self.shade(cx, at, &alone, &mut rng, stratum, &mut rays);
+        (!near.is_empty()).then(|| (self.shade(cx, at, near, &mut rng, stratum, &mut rays), own))
+    }
+
     fn reference(&self, cx: &Lit<'_>, s: &ShadingPoint, rng: &mut Rng, _: Stratum, rays: &mut RayCounters) -> [f32; 3] {
         let e = self.gather(cx, s, rng, rays, None);
         if e == Spectrum::ZERO {

@@ -278,6 +278,20 @@ pub trait Application: Sync + Sized {
         rays: &mut RayCounters,
     ) -> [f32; 3];
 
+    /// The leave-one-out question of refine's error estimate: the value shading at a cache's own site `at`
+    /// gives from the caches `near` (the cache itself not among them) and from `own` alone, or `None` when
+    /// the application cannot say (the default). Asked while placing, before [`Application::finish_record`].
+    fn predict(
+        &self,
+        cx: &Self::Prepared<'_>,
+        at: &ShadingPoint,
+        own: &Self::Record,
+        near: &[Neighbour<'_, Self::Record>],
+    ) -> Option<([f32; 3], [f32; 3])> {
+        let _ = (cx, at, own, near);
+        None
+    }
+
     /// The brute-force answer at one sample: what the caches approximate (references, goldens); a
     /// per-sample estimator's when [`CachePlan::shade_by_reference`] says so (`stratum` as for
     /// [`Application::shade`]).

@@ -74,6 +74,14 @@ pub fn parse_caches(s: &str) -> std::result::Result<usize, String> {
     }
 }
 
+/// Parses a `--target-error E` value: a positive finite relative RMSE, for clap.
+pub fn parse_target_error(s: &str) -> std::result::Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(e) if e > 0.0 && e.is_finite() => Ok(e),
+        _ => Err(format!("expected a positive relative RMSE such as 0.05, got \"{s}\"")),
+    }
+}
+
 /// Parses a `--resolution WxH` value (positive integers), for clap.
 pub fn parse_resolution(s: &str) -> std::result::Result<[u32; 2], String> {
     let p = |v: &str| v.trim().parse::<u32>().ok().filter(|&v| v > 0);

@@ -55,6 +55,10 @@ pub struct RenderArgs {
     /// Cache-based integrators: the total cache budget (the parameter "caches").
     #[arg(long, allow_negative_numbers = true, value_parser = super::parse_caches)]
     pub caches: Option<usize>,
+    /// refine: place caches until its own estimate of the relative RMSE against the per-sample reference
+    /// is this (e.g. 0.05; the parameter "targeterror"); the budget becomes a ceiling.
+    #[arg(long, value_name = "E", allow_negative_numbers = true, value_parser = super::parse_target_error)]
+    pub target_error: Option<f64>,
     /// Cache-based renders: write the image with stage-1 caches (red) and stage-2 caches (cyan) marked.
     #[arg(long)]
     pub overlay: Option<PathBuf>,
@@ -95,7 +99,12 @@ pub fn job(args: &RenderArgs) -> RenderJob {
             quick: args.quick,
             integrator: args.integrator.clone(),
             set: args.set.clone(),
-            cache: CacheOverrides { placement: args.placement, caches: args.caches, subpixels: None },
+            cache: CacheOverrides {
+                placement: args.placement,
+                caches: args.caches,
+                subpixels: None,
+                target_error: args.target_error,
+            },
         },
         outputs: Outputs {
             images: args.outfile.clone(),

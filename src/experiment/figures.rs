@@ -197,5 +197,6 @@ pub fn write(records: &[Record], out: &Path, log: &mut dyn FnMut(&str)) -> Resul
             figures.push(figure(svg, format!("error against {key} at {caches} caches (the paper's Fig. 8 / Table 3)")));
         }
     }
+    figures.extend(super::target::figures(records, out)?);
     Ok(figures)
 }

@@ -54,7 +54,12 @@ pub fn render_job(job: &Job, out: &Path, threads: Option<usize>) -> Result<Rende
             threads,
             integrator: Some(job.application.clone()),
             set: job.set.clone(),
-            cache: CacheOverrides { placement: Some(placement), caches: Some(job.caches), subpixels: None },
+            cache: CacheOverrides {
+                placement: Some(placement),
+                caches: Some(job.caches),
+                subpixels: None,
+                target_error: None,
+            },
             ..Default::default()
         },
         outputs: Outputs {
@@ -270,6 +275,11 @@ pub struct Record {
     pub sigma_a_deg: Option<f64>,
     /// Seconds of the reference render.
     pub reference_s: f64,
+    /// The reference's mean over every pixel and channel (RMSE over it is the relative RMSE a target error
+    /// asks for).
+    pub reference_mean: f64,
+    /// refine with a target error: its last estimate of the relative RMSE (`--stats`' `error_estimates`).
+    pub estimate: Option<f64>,
 }
 
 fn read_json(path: &Path) -> Option<serde_json::Value> {
@@ -309,6 +319,8 @@ fn record(job: &Job, status: &str, error: String) -> Record {
         record_bytes: 0,
         sigma_a_deg: None,
         reference_s: f64::NAN,
+        reference_mean: f64::NAN,
+        estimate: None,
     }
 }
 
@@ -323,6 +335,7 @@ fn fill(r: &mut Record, stats: &serde_json::Value) {
     r.peak_memory_bytes = s["peak_memory_bytes"].as_u64();
     r.record_bytes = s["record_bytes"].as_u64().unwrap_or(0);
     r.sigma_a_deg = s["placement"]["sigma_a_deg"].as_f64();
+    r.estimate = s["error_estimates"].as_array().and_then(|e| e.last()).and_then(|e| e["relative_rmse"].as_f64());
 }
 
 /// A reference image and its seconds, or why there is none.
@@ -344,6 +357,7 @@ impl References<'_> {
             (Err(e), _) => return (r.status, r.error) = ("failed".into(), e.to_string()),
             (Ok(img), Some(Ok((reference, secs)))) => {
                 r.reference_s = *secs;
+                r.reference_mean = reference.mean().iter().sum::<f64>() / 3.0;
                 r.resolution = Some([reference.width as u32, reference.height as u32]);
                 match compare(&img, reference, &[Metric::Rmse, Metric::Flip]) {
                     Ok(m) => (r.rmse, r.flip) = (m[0].1, m[1].1),

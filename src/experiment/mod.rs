@@ -28,6 +28,7 @@ pub mod results;
 pub mod spec;
 pub mod summary;
 pub mod tables;
+pub mod target;
 pub mod ticks;
 pub mod wins;
 

@@ -42,7 +42,7 @@ const HEAD: [&str; 18] = [
 ];
 
 /// The columns after the stage times.
-const TAIL: [&str; 8] = [
+const TAIL: [&str; 10] = [
     "stage1",
     "stage2",
     "cache_rays",
@@ -51,6 +51,8 @@ const TAIL: [&str; 8] = [
     "record_bytes",
     "sigma_a_deg",
     "reference_s",
+    "reference_mean",
+    "estimate",
 ];
 
 /// A CSV field: quoted when it holds a comma, a quote or a line break.
@@ -113,7 +115,7 @@ pub fn write_csv(records: &[Record], path: &Path) -> Result<()> {
         }
         let _ = writeln!(
             csv,
-            ",{},{},{},{},{},{},{},{}",
+            ",{},{},{},{},{},{},{},{},{},{}",
             r.caches_placed[0],
             r.caches_placed[1],
             r.rays[0],
@@ -121,7 +123,9 @@ pub fn write_csv(records: &[Record], path: &Path) -> Result<()> {
             r.peak_memory_bytes.map_or(String::new(), |b| b.to_string()),
             r.record_bytes,
             opt(r.sigma_a_deg),
-            opt(Some(r.reference_s).filter(|s| s.is_finite()))
+            opt(Some(r.reference_s).filter(|s| s.is_finite())),
+            opt(Some(r.reference_mean).filter(|s| s.is_finite())),
+            opt(r.estimate)
         );
     }
     crate::image::write_bytes(path, csv.as_bytes())
@@ -282,6 +286,8 @@ impl CsvLine<'_> {
             record_bytes: self.count("record_bytes")?.unwrap_or(0),
             sigma_a_deg: self.number("sigma_a_deg")?,
             reference_s: self.number("reference_s")?.unwrap_or(f64::NAN),
+            reference_mean: self.number("reference_mean")?.unwrap_or(f64::NAN),
+            estimate: self.number("estimate")?,
         })
     }
 }

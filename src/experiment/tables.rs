@@ -113,6 +113,7 @@ pub fn all(records: &[Record]) -> Vec<Table> {
     let mut t = claims(records);
     t.extend(super::ratios::to_im(records));
     t.extend(super::beyond::against_the_paper(records));
+    t.extend(super::target::table(records));
     t.extend(super::ratios::seed_spread(records));
     t.extend(super::ratios::equal_time(records));
     t.extend(super::ratios::converged(records));

@@ -45,7 +45,7 @@ pub fn render_spec(dir: &Path, spec: &Spec, threads: Option<usize>) -> Result<Re
             quick: false,
             integrator: Some(spec.integrator.clone()),
             set: spec.set.iter().map(|(k, v)| (k.clone(), v.clone())).collect(),
-            cache: CacheOverrides { placement, caches: spec.caches, subpixels: None },
+            cache: CacheOverrides { placement, caches: spec.caches, subpixels: None, target_error: None },
         },
         outputs: Default::default(),
     };

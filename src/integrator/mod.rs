@@ -20,7 +20,7 @@ use crate::render::{INTEGRATORS, RayCounters, per_pixel_integrator, render_image
 use crate::scene::Scene;
 
 /// How to render, beyond what the scene file says.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct RenderSettings {
     /// Seed of every random stream.
     pub seed: u64,

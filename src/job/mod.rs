@@ -32,7 +32,7 @@ pub struct Outputs {
 }
 
 /// A render job: what `cachert render` is given, as data.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct RenderJob {
     /// The pbrt-v3 scene file.
     pub scene: PathBuf,

@@ -422,7 +422,7 @@ impl AdaptivePlacement for Discontinuity {
         if !sites.is_empty() {
             oracle.evaluate(&sites);
         }
-        Ok(AdaptiveInfo { added: sites.len(), rounds: 1, discontinuity: Some(map), notes })
+        Ok(AdaptiveInfo { added: sites.len(), rounds: 1, discontinuity: Some(map), notes, ..Default::default() })
     }
 }
 

@@ -13,6 +13,7 @@
 //! | [`view_guided`] | VGC, the paper's first stage, Eq. 1–2 with a σ_s search (§4.4) |
 //! | [`adaptive`] | AS, neighbour-error insertion after SD or VGC (§4.3, a reconstruction) |
 //! | [`discontinuity`] | DGS, the paper's second stage, Eq. 3–4 (§4.5) |
+//! | [`estimate`] | refine's reference-free estimate of the image's relative RMSE (leave-one-out) |
 //! | [`refine`] | refine's rounds of map-guided insertion after IM (beyond the paper; experiments/notes/refine.md) |
 //! | [`registry`] | the strategy names |
 //! | [`synthetic`] | analytic G-buffers and a mock oracle, for tests and `cachert bench micro` |
@@ -24,6 +25,7 @@
 
 pub mod adaptive;
 pub mod discontinuity;
+pub mod estimate;
 pub mod image_uniform;
 pub mod refine;
 pub mod registry;
@@ -135,6 +137,42 @@ pub trait CacheOracle {
     }
     /// Evaluates caches at `sites` (distinct valid pixels without a cache) and appends them.
     fn evaluate(&mut self, sites: &[PixelId]);
+    /// For each `(c, others)`: what the application's shading at cache `c`'s own site makes of the caches
+    /// `others` (ids with normalised weights, `c` not among them) against what it makes of `c` alone — the
+    /// leave-one-out question behind refine's error estimate. `None` where the application cannot answer
+    /// it (the default: no application can).
+    fn predict_many(&mut self, asks: &[(CacheId, Vec<(CacheId, f32)>)]) -> Vec<Option<Prediction>> {
+        vec![None; asks.len()]
+    }
+}
+
+/// What a cache's neighbours predict at its site ([`CacheOracle::predict_many`]), in the image's units: the
+/// colour channels' mean of the squared difference and of the cache's own value.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Prediction {
+    /// Mean over the colour channels of (value from the others − value from the cache alone)².
+    pub sq_err: f32,
+    /// Mean over the colour channels of the value from the cache alone.
+    pub value: f32,
+}
+
+/// A target error for refine ([`PlacementParams::target`]): rounds stop when the estimate meets it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TargetError {
+    /// The relative RMSE asked for: RMSE against the per-sample reference over its mean, all channels.
+    pub relative: f32,
+    /// The mean of what the image adds to the cached values outside the caches (a per-pixel term, over
+    /// all pixels and channels), which the relative error's denominator includes (0 when nothing is added).
+    pub added_mean: f32,
+}
+
+/// One of refine's error estimates (`--stats`): the caches placed when it was made and what it said.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RoundEstimate {
+    /// Caches placed so far.
+    pub caches: usize,
+    /// Estimated relative RMSE of the image these caches would give.
+    pub relative_rmse: f32,
 }
 
 /// What a second stage did (for `--stats`).
@@ -148,6 +186,8 @@ pub struct AdaptiveInfo {
     pub discontinuity: Option<Vec<f32>>,
     /// Non-fatal remarks.
     pub notes: Vec<String>,
+    /// refine with a target error: its estimate after the first stage and after each round.
+    pub estimates: Vec<RoundEstimate>,
 }
 
 /// A second-stage strategy: adds `budget` caches where the first-stage caches disagree. Every cache it
@@ -214,6 +254,9 @@ pub struct PlacementParams {
     pub refine_rounds: u32,
     /// refine: the uniform floor added to each round's map, as a fraction of the map's mean.
     pub refine_floor: f32,
+    /// refine: place caches until this error is estimated met (the budget is then a ceiling); `None`:
+    /// place the whole budget.
+    pub target: Option<TargetError>,
 }
 
 impl Default for PlacementParams {
@@ -233,6 +276,7 @@ impl Default for PlacementParams {
             refine_share: 0.8,
             refine_rounds: 4,
             refine_floor: 0.1,
+            target: None,
         }
     }
 }

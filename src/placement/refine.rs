@@ -14,8 +14,11 @@
 use rayon::prelude::*;
 
 use super::discontinuity::{cache_points, diff_and_gap_terms, draw_tagged, geometry_term};
+use super::estimate;
 use super::points::usable_normal;
-use super::{AdaptiveInfo, AdaptivePlacement, CacheId, CacheOracle, PlacementParams, Stage1};
+use super::{
+    AdaptiveInfo, AdaptivePlacement, CacheId, CacheOracle, PlacementParams, RoundEstimate, Stage1, TargetError,
+};
 use crate::cache::CacheIndex;
 use crate::error::Result;
 use crate::gbuffer::GBuffer;
@@ -61,9 +64,7 @@ impl AdaptivePlacement for Refine {
         if budget == 0 {
             return Ok(AdaptiveInfo::default());
         }
-        let rounds = params.refine_rounds.max(1) as usize;
         let mut taken = vec![false; g.width * g.height];
-        let mut info = AdaptiveInfo::default();
         let fixed = Fixed::new(g, params);
         // The first stage's caches; each round's draws mark their own.
         for c in 0..oracle.len() as CacheId {
@@ -71,26 +72,101 @@ impl AdaptivePlacement for Refine {
                 *t = true;
             }
         }
+        let mut state = Rounds { g, params, seed, fixed, taken, info: AdaptiveInfo::default() };
+        match params.target {
+            Some(target) => state.until_target(oracle, budget, target),
+            None => state.equal_rounds(oracle, budget),
+        }
+        state.info.notes.dedup();
+        Ok(state.info)
+    }
+}
+
+/// What refine's rounds share.
+struct Rounds<'a> {
+    g: &'a GBuffer,
+    params: &'a PlacementParams,
+    seed: u64,
+    fixed: Fixed,
+    taken: Vec<bool>,
+    info: AdaptiveInfo,
+}
+
+impl Rounds<'_> {
+    /// Round `r`: draws `n` caches from a fresh map and evaluates them; returns how many it added.
+    fn round(&mut self, oracle: &mut dyn CacheOracle, r: usize, n: usize) -> usize {
+        let map = round_map(self.g, oracle, self.params, &self.taken, &self.fixed);
+        let tags = [STAGE_DRAW + r as u64, STAGE_FALLBACK + r as u64];
+        let (sites, notes) = draw_tagged(self.g, &map, &mut self.taken, n, self.seed, tags);
+        self.info.notes.extend(notes);
+        if !sites.is_empty() {
+            self.info.added += sites.len();
+            self.info.rounds += 1;
+            oracle.evaluate(&sites);
+            self.info.discontinuity = Some(map);
+        }
+        sites.len()
+    }
+
+    /// `refine_rounds` rounds sharing `budget` equally.
+    fn equal_rounds(&mut self, oracle: &mut dyn CacheOracle, budget: usize) {
+        let rounds = self.params.refine_rounds.max(1) as usize;
         for r in 0..rounds {
             // Round r's share of the budget: the rounding leaves the sum exactly `budget`.
             let n = budget * (r + 1) / rounds - budget * r / rounds;
-            if n == 0 {
-                continue;
-            }
-            let map = round_map(g, oracle, params, &taken, &fixed);
-            let tags = [STAGE_DRAW + r as u64, STAGE_FALLBACK + r as u64];
-            let (sites, notes) = draw_tagged(g, &map, &mut taken, n, seed, tags);
-            info.notes.extend(notes);
-            if sites.is_empty() {
+            if n > 0 && self.round(oracle, r, n) == 0 {
                 break;
             }
-            info.added += sites.len();
-            info.rounds += 1;
-            oracle.evaluate(&sites);
-            info.discontinuity = Some(map);
         }
-        info.notes.dedup();
-        Ok(info)
+    }
+
+    /// The error estimate of the caches placed so far, recorded.
+    fn estimate(&mut self, oracle: &mut dyn CacheOracle, target: TargetError) -> Option<f32> {
+        let e = estimate::relative_rmse(self.g, oracle, self.params, target.added_mean)?;
+        self.info.estimates.push(RoundEstimate { caches: oracle.len(), relative_rmse: e });
+        Some(e)
+    }
+
+    /// Rounds until the estimate meets `target` or `budget` caches are added. Each round aims at the
+    /// count the last two estimates predict (error ∝ caches^−α, α from their slope, 0.5 at first),
+    /// adding between a quarter of and as many caches as are placed so far (a larger step overshoots when
+    /// α is misjudged: the achieved error then falls well below the target).
+    fn until_target(&mut self, oracle: &mut dyn CacheOracle, budget: usize, target: TargetError) {
+        let Some(mut e) = self.estimate(oracle, target) else {
+            self.info.notes.push(
+                "targeterror: this application cannot estimate its error from its caches; the whole budget is placed"
+                    .into(),
+            );
+            return self.equal_rounds(oracle, budget);
+        };
+        let goal = target.relative.max(f32::MIN_POSITIVE);
+        let mut last: Option<(usize, f32)> = None;
+        let mut r = 0;
+        while e > goal && self.info.added < budget {
+            let now = oracle.len();
+            let alpha = match last {
+                Some((n0, e0)) if e0 > e && now > n0 => ((e0 / e).ln() / (now as f32 / n0 as f32).ln()).clamp(0.3, 1.5),
+                _ => 0.5,
+            };
+            let want = now as f32 * (e / goal).powf(1.0 / alpha);
+            let add = ((want - now as f32).round() as usize).clamp(now.div_ceil(4), now);
+            let add = add.min(budget - self.info.added);
+            if self.round(oracle, r, add) == 0 {
+                break;
+            }
+            r += 1;
+            last = Some((now, e));
+            match self.estimate(oracle, target) {
+                Some(next) => e = next,
+                None => break,
+            }
+        }
+        if e > goal {
+            self.info.notes.push(format!(
+                "targeterror {goal}: not met within the budget of {} caches (estimated relative RMSE {e:.4}); raise `caches`",
+                oracle.len()
+            ));
+        }
     }
 }
 
@@ -186,8 +262,8 @@ fn add_floor(g: &GBuffer, map: &mut [f32], taken: &[bool], floor: f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::placement::ImageUniform;
     use crate::placement::test_scenes as ts;
+    use crate::placement::{ImageUniform, InitialPlacement};
 
     #[test]
     fn refine_meets_the_contract() {
@@ -229,5 +305,43 @@ mod tests {
         assert_eq!(info.added, 200);
         let right = oracle.sites[left.len()..].iter().filter(|&&id| id as usize % 96 >= 48).count();
         assert!(right >= 140, "only {right} of 200 new caches went to the empty half (uniform: about 100)");
+    }
+
+    #[test]
+    fn a_target_error_stops_the_rounds_when_the_estimate_meets_it() {
+        let g = ts::plane(160, 96);
+        let run = |target: f32, budget: usize| {
+            let p = PlacementParams {
+                target: Some(TargetError { relative: target, added_mean: 0.0 }),
+                ..PlacementParams::default()
+            };
+            let first = crate::placement::registry::strategy("refine").unwrap().first_stage_budget(budget, &p);
+            let s1 = ImageUniform.place(&g, first, &p, ts::SEED).unwrap();
+            let mut oracle = ts::MaskOracle::new(&g, &s1.sites);
+            let info = Refine.place(&g, &s1, &mut oracle, budget - first, &p, ts::SEED).unwrap();
+            (first, oracle.sites.len(), info)
+        };
+        // A loose target: the first stage (1/256 of the ceiling, at least 16) may already meet it.
+        let (first, loose, info) = run(0.5, 8000);
+        assert_eq!(first, 31);
+        assert_eq!(info.estimates[0].caches, first);
+        assert!(loose < 400, "{loose} caches for a 50 % target");
+        // A tighter one: rounds until the last estimate meets it, each recorded; the count falls short of the
+        // ceiling, and the estimates fall.
+        let (_, tight, info) = run(0.05, 8000);
+        let last = info.estimates.last().unwrap();
+        assert!(tight > loose && tight < 8000, "{tight}: {info:?}");
+        assert_eq!(last.caches, tight);
+        assert!(last.relative_rmse <= 0.05, "{info:?}");
+        assert!(info.estimates.windows(2).all(|w| w[1].caches > w[0].caches), "{:?}", info.estimates);
+        assert!(info.notes.is_empty(), "{:?}", info.notes);
+        // An unreachable one: the whole ceiling, and a note that says so.
+        let (_, all, info) = run(1e-6, 600);
+        assert_eq!(all, 600);
+        assert!(info.notes.iter().any(|n| n.contains("not met")), "{:?}", info.notes);
+        // The thread count changes nothing.
+        let two = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap().install(|| run(0.05, 8000));
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| run(0.05, 8000));
+        assert_eq!((one.1, one.2), (two.1, two.2));
     }
 }

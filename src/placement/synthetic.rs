@@ -7,7 +7,7 @@
 
 use glam::Vec3A;
 
-use super::{CacheId, CacheOracle};
+use super::{CacheId, CacheOracle, Prediction};
 use crate::gbuffer::{GBuffer, PixelId, ShadingPoint};
 
 /// An analytic primitive.
@@ -126,6 +126,11 @@ pub fn mask_at(p: Vec3A) -> [u64; 16] {
     m
 }
 
+/// The value a mask stands for: its fraction of set bits.
+pub fn mask_value(m: &[u64; 16]) -> f32 {
+    m.iter().map(|x| x.count_ones()).sum::<u32>() as f32 / 1024.0
+}
+
 /// A mock oracle: records are [`mask_at`] of the site position; counts calls.
 #[derive(Debug)]
 pub struct MaskOracle<'a> {
@@ -171,6 +176,16 @@ impl CacheOracle for MaskOracle<'_> {
     fn diff_many(&self, pairs: &[(CacheId, CacheId)]) -> Vec<f32> {
         self.diff_many_calls.set(self.diff_many_calls.get() + 1);
         pairs.iter().map(|&(a, b)| self.diff(a, b)).collect()
+    }
+    /// The "AO" of a mask is its fraction of set bits; a blend is the weighted mean of the others'.
+    fn predict_many(&mut self, asks: &[(CacheId, Vec<(CacheId, f32)>)]) -> Vec<Option<Prediction>> {
+        asks.iter()
+            .map(|(c, others)| {
+                let own = mask_value(&self.masks[*c as usize]);
+                let blend: f32 = others.iter().map(|&(o, w)| w * mask_value(&self.masks[o as usize])).sum();
+                Some(Prediction { sq_err: (blend - own).powi(2), value: own })
+            })
+            .collect()
     }
     fn evaluate(&mut self, sites: &[PixelId]) {
         self.evaluate_calls += 1;

@@ -84,6 +84,17 @@ fn render_pass<A: Application>(
         let start = std::time::Instant::now();
         let cx = app.prepare(scene, &mut run_warnings)?;
         let prepare_secs = start.elapsed().as_secs_f64();
+        // With a target error the per-pixel term renders first: the relative error refine aims at is the
+        // whole image's, whose mean includes the term (the term itself is the same in the reference).
+        let mut early = None;
+        let mut cs = cs.clone();
+        if let (Some(term), Some(target), Pass::Render) = (&term, &mut cs.params.target, pass) {
+            let w = &mut run_warnings;
+            early = render_per_pixel_term(scene, term.integrator, &term.set, settings, w, pass)?;
+            if let Some((image, _, _)) = &early {
+                target.added_mean = (image.mean().iter().sum::<f64>() / 3.0) as f32;
+            }
+        }
         let mut out = match pass {
             Pass::Render => Some(render_cached(scene, &app, &cx, &cs)?),
             Pass::DryRun => None,
@@ -105,7 +116,10 @@ fn render_pass<A: Application>(
         // sum's clamp cannot be reproduced.
         if let Some(term) = &term {
             let w = &mut run_warnings;
-            let rendered = render_per_pixel_term(scene, term.integrator, &term.set, settings, w, pass)?;
+            let rendered = match early {
+                Some(done) => Some(done),
+                None => render_per_pixel_term(scene, term.integrator, &term.set, settings, w, pass)?,
+            };
             if let (Some(out), Some(rendered)) = (&mut out, rendered) {
                 add_term(out, term, rendered);
             }

@@ -18,7 +18,7 @@ use crate::cache::{CacheIndex, GroupScratch};
 use crate::error::{Error, Result};
 use crate::gbuffer::{GBuffer, PixelId};
 use crate::image::Image;
-use crate::placement::{CacheId, CacheOracle, registry};
+use crate::placement::{CacheId, CacheOracle, Prediction, registry};
 use crate::render::film::clamp_sample_luminance;
 use crate::sampling::rng::{hash3, mix64};
 use crate::sampling::sequence::sobol02;
@@ -88,6 +88,23 @@ impl<A: Application> CacheOracle for Store<'_, '_, A> {
 
     fn diff_many(&self, pairs: &[(CacheId, CacheId)]) -> Vec<f32> {
         pairs.par_iter().map(|&(a, b)| self.diff(a, b)).collect()
+    }
+
+    fn predict_many(&mut self, asks: &[(CacheId, Vec<(CacheId, f32)>)]) -> Vec<Option<Prediction>> {
+        let (cx, app, g, records, sites) = (self.cx, self.app, self.g, &self.records, &self.sites);
+        let neighbour = |c: CacheId, weight: f32| {
+            let sp = g.get(sites[c as usize])?;
+            Some(Neighbour { record: &records[c as usize], p: sp.p, n: sp.n, weight })
+        };
+        asks.par_iter()
+            .map(|(c, others)| {
+                let at = g.get(sites[*c as usize])?;
+                let near: Vec<_> = others.iter().filter_map(|&(o, w)| neighbour(o, w)).collect();
+                let (from_others, alone) = app.predict(cx, at, &records[*c as usize], &near)?;
+                let sq_err = (0..3).map(|k| (from_others[k] - alone[k]).powi(2)).sum::<f32>() / 3.0;
+                Some(Prediction { sq_err, value: alone.iter().sum::<f32>() / 3.0 })
+            })
+            .collect()
     }
 
     fn evaluate(&mut self, sites: &[PixelId]) {
@@ -273,6 +290,7 @@ fn place<A: Application>(
         times.adaptive_computation = adaptive_eval;
         times.adaptive_generation = t.elapsed().as_secs_f64() - adaptive_eval;
         stats.adaptive_rounds = info.rounds;
+        stats.error_estimates = info.estimates;
         stats.notes.extend(info.notes);
         discontinuity = info.discontinuity;
     }

@@ -9,7 +9,7 @@ use std::fmt;
 
 use crate::error::{Error, Result};
 use crate::gbuffer::scale::SceneScale;
-use crate::placement::{AngularMode, PlacementParams, registry};
+use crate::placement::{AngularMode, PlacementParams, TargetError, registry};
 use crate::scene::Scene;
 
 use crate::parse::integrator::{Choice, IntegratorParams, ParamDef, Parameter, Valid, json_f32};
@@ -44,6 +44,13 @@ pub const REFINE_FLOOR: ParamDef<f64> = ParamDef::float(
     "refine: uniform floor added to each round's map, as a fraction of the map's mean",
 )
 .valid(Valid::AtLeast { lo: 0.0, finite: true });
+/// `targeterror`: refine's target relative RMSE.
+pub const TARGET_ERROR: ParamDef<f64> = ParamDef::computed(
+    "targeterror",
+    "none",
+    "refine: place caches until its own estimate of the relative RMSE against `none` is this (`caches` becomes a ceiling)",
+)
+.valid(Valid::Positive { finite: true });
 /// `sigma_a`: VGC's σ_a (default from the cache density, chosen by the strategy).
 pub const SIGMA_A: ParamDef<f64> = ParamDef::computed(
     "sigma_a",
@@ -92,6 +99,7 @@ pub const PARAMETERS: &[Parameter] = &[
     REFINE_SHARE.row,
     REFINE_ROUNDS.row,
     REFINE_FLOOR.row,
+    TARGET_ERROR.row,
     SIGMA_A.row,
     GAMMA.row,
     METERS_PER_UNIT.row,
@@ -160,7 +168,7 @@ impl fmt::Display for Placement {
 
 /// Typed command-line settings of a cache-based render that win over the scene's and `--set`'s
 /// (`--placement`, `--caches`, `--spp`; `experiment`'s sweep).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CacheOverrides {
     /// The placement (`--placement`).
     pub placement: Option<Placement>,
@@ -168,6 +176,8 @@ pub struct CacheOverrides {
     pub caches: Option<usize>,
     /// The sub-pixel count when the parameter `subpixels` is not written (`--spp`, `--quick`).
     pub subpixels: Option<u32>,
+    /// refine's target relative RMSE (`--target-error`).
+    pub target_error: Option<f64>,
 }
 
 /// How a cache-based render is set up: the generic parameters, resolved.
@@ -242,6 +252,31 @@ impl CacheSettings {
             Some(pl) => pl,
             None => Placement::parse_or_why(&written).map_err(|why| p.invalid(&PLACEMENT.row, why))?,
         };
+        // Read even when overridden, as `caches` is.
+        let written_target = p.get_opt(&TARGET_ERROR)?;
+        let target = match (o.target_error, written_target) {
+            (Some(t), _) if !(t > 0.0 && t.is_finite()) => {
+                return Err(Error::usage(format!("--target-error must be a positive number, got {t}")));
+            }
+            (Some(t), _) => Some(t),
+            (None, t) => t,
+        };
+        if let Some(t) = target {
+            match placement {
+                Placement::Strategy("refine") => {
+                    params.target = Some(TargetError { relative: t as f32, added_mean: 0.0 });
+                }
+                // The per-sample reference places no caches: a target has nothing to steer.
+                Placement::Reference => {}
+                Placement::Strategy(other) => {
+                    let why = format!("needs placement \"refine\" (the placement is \"{other}\")");
+                    return Err(match (o.target_error, written_target) {
+                        (None, Some(_)) => p.invalid(&TARGET_ERROR.row, why),
+                        _ => Error::usage(format!("--target-error {why}")),
+                    });
+                }
+            }
+        }
         let seed = p.get_or(&SEED, seed as i64)? as u64;
         Ok(CacheSettings { placement, caches: caches as usize, params, subpixels, seed, progress, scale })
     }
@@ -254,13 +289,14 @@ impl CacheSettings {
             AngularMode::Cone => "cone",
             AngularMode::SphericalAngles => "spherical",
         };
-        let pairs: [(&str, serde_json::Value); 18] = [
+        let pairs: [(&str, serde_json::Value); 19] = [
             ("placement", self.placement.name().into()),
             ("caches", self.caches.into()),
             ("ratio", json_f32(p.ratio)),
             ("refineshare", json_f32(p.refine_share)),
             ("refinerounds", p.refine_rounds.into()),
             ("refinefloor", json_f32(p.refine_floor)),
+            ("targeterror", p.target.map(|t| json_f32(t.relative)).into()),
             ("sigma_a", p.sigma_a_deg.map(json_f32).into()),
             ("gamma", json_f32(p.gamma)),
             ("meters_per_unit", json_f32(p.meters_per_unit)),

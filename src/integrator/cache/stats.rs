@@ -5,7 +5,7 @@ use serde::Serialize;
 
 use super::camera_path::PathCounts;
 use crate::gbuffer::scale::{ScaleSource, SceneScale, VIEW_FACTOR};
-use crate::placement::PlacementInfo;
+use crate::placement::{PlacementInfo, RoundEstimate};
 use crate::scene::ray::RayCounters;
 
 /// Wall seconds of each step (paper Table 4).
@@ -70,6 +70,9 @@ pub struct CacheStats {
     pub total_caches: usize,
     /// Second-stage rounds.
     pub adaptive_rounds: u32,
+    /// refine with a target error: its estimated relative RMSE after the first stage and after each round.
+    #[serde(serialize_with = "ser_estimates")]
+    pub error_estimates: Vec<RoundEstimate>,
     /// First-stage search results (σ_s, iterations, …).
     #[serde(serialize_with = "ser_info")]
     pub placement: PlacementInfo,
@@ -134,6 +137,24 @@ fn ser_rays<S: serde::Serializer>(r: &RayCounters, s: S) -> Result<S::Ok, S::Err
     st.serialize_field("occlusion", &r.shadow)?;
     st.serialize_field("total", &r.total())?;
     st.end()
+}
+
+fn ser_estimates<S: serde::Serializer>(e: &[RoundEstimate], s: S) -> Result<S::Ok, S::Error> {
+    use serde::ser::{SerializeSeq, SerializeStruct};
+    let mut seq = s.serialize_seq(Some(e.len()))?;
+    for r in e {
+        struct Row<'a>(&'a RoundEstimate);
+        impl serde::Serialize for Row<'_> {
+            fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                let mut st = s.serialize_struct("estimate", 2)?;
+                st.serialize_field("caches", &self.0.caches)?;
+                st.serialize_field("relative_rmse", &self.0.relative_rmse)?;
+                st.end()
+            }
+        }
+        seq.serialize_element(&Row(r))?;
+    }
+    seq.end()
 }
 
 fn ser_info<S: serde::Serializer>(i: &PlacementInfo, s: S) -> Result<S::Ok, S::Error> {
