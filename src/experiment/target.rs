@@ -12,11 +12,12 @@ use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
 
-use super::chart::{PALETTE, font};
+use super::chart::{PALETTE, font, tick};
 use super::figures::Figure;
 use super::jobs::Record;
 use super::summary::{Summary, ok};
 use super::tables::Table;
+use super::ticks::log_ticks;
 use crate::error::{Error, Result};
 
 /// The parameter swept.
@@ -158,14 +159,26 @@ fn draw<DB: DrawingBackend>(
     let all = lines.values().flatten();
     let lo = all.clone().flat_map(|p| [p.0, p.2]).fold(f64::INFINITY, f64::min).max(1e-6) * 0.7;
     let hi = all.flat_map(|p| [p.0, p.3]).fold(0.0f64, f64::max).max(lo * 2.0) * 1.4;
+    // Labelled at 1, 2 and 5 of every decade.
+    let (labelled, grid) = log_ticks(lo, hi);
     let mut chart = ChartBuilder::on(root)
         .caption(format!("{app}: target against achieved relative RMSE"), ("sans-serif", 16))
         .margin(10)
         .x_label_area_size(40)
         .y_label_area_size(60)
-        .build_cartesian_2d((lo..hi).log_scale(), (lo..hi).log_scale())
+        .build_cartesian_2d(
+            (lo..hi).log_scale().with_key_points(labelled.clone()).with_light_points(grid.clone()),
+            (lo..hi).log_scale().with_key_points(labelled).with_light_points(grid),
+        )
         .map_err(e)?;
-    chart.configure_mesh().x_desc("target (log)").y_desc("achieved relative RMSE (log)").draw().map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc("target (log)")
+        .y_desc("achieved relative RMSE (log)")
+        .x_label_formatter(&|v| tick(*v))
+        .y_label_formatter(&|v| tick(*v))
+        .draw()
+        .map_err(e)?;
     let grey = RGBColor(150, 150, 150);
     for (k, style) in [(1.0, grey.stroke_width(2)), (BAND.0, grey.stroke_width(1)), (BAND.1, grey.stroke_width(1))] {
         chart.draw_series(LineSeries::new([(lo, lo * k), (hi, hi * k)], style)).map_err(e)?;

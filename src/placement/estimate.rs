@@ -23,10 +23,11 @@ use crate::gbuffer::GBuffer;
 
 /// The ratio of a pixel's squared error to the leave-one-out squared error of the caches it blends,
 /// measured on scenes outside the stability map (Veach's MIS scene and the shipped room and spheres, cache
-/// AO at 160×90, 64–4000 caches: the achieved relative RMSE was 0.67–0.97 of the estimate with 1, geometric
-/// mean 0.765, whose square this is). Scaling each cache's miss by the distance to the caches a pixel blends
-/// against the distance to its own neighbours (to the first or second power) spread the ratio wider
-/// (0.56–1.51, 0.32–1.43) and was left out.
+/// AO at 160×90, 64–4000 caches: the achieved relative RMSE was 0.669–0.966 of the estimate made with 1,
+/// geometric mean 0.765, whose square this is; experiments/results/refine-target/calibration.csv). Scaling
+/// each cache's miss by the distance of a pixel to the caches it blends over the distance of the cache to
+/// its own neighbours, to the first or the second power, spread the ratio wider over all seven scenes
+/// (0.557–1.515 and 0.319–1.434, against 0.669–1.251 without) and was left out.
 pub const KAPPA: f32 = 0.6;
 
 /// The estimate is made on every `STRIDE`-th pixel in x and y.
