@@ -217,22 +217,39 @@ pub fn save(plot: &Plot, path: &Path) -> Result<()> {
         return Ok(());
     }
     font()?;
+    save_drawing(plot, (1200, 500), path)
+}
+
+/// A figure that can draw itself on any plotters backend (the SVG and the PNG of [`save_drawing`]).
+pub trait Drawing {
+    /// Draws the figure on `root`.
+    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> std::result::Result<(), String>;
+}
+
+impl Drawing for Plot {
+    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> std::result::Result<(), String> {
+        draw(self, root)
+    }
+}
+
+/// Writes `figure` at `size` pixels to `path` as SVG and to the same path with `.png` as PNG (the font must be
+/// registered: [`font`]).
+pub fn save_drawing(figure: &impl Drawing, size: (u32, u32), path: &Path) -> Result<()> {
     let fail = |e: String| Error::file(path, format!("cannot draw the chart: {e}"));
-    const SIZE: (u32, u32) = (1200, 500);
     {
-        let root = SVGBackend::new(path, SIZE).into_drawing_area();
-        draw(plot, &root).map_err(fail)?;
+        let root = SVGBackend::new(path, size).into_drawing_area();
+        figure.draw_on(&root).map_err(fail)?;
         root.present().map_err(|e| fail(e.to_string()))?;
     }
     let png = path.with_extension("png");
-    let mut buf = vec![0u8; (SIZE.0 * SIZE.1 * 3) as usize];
+    let mut buf = vec![0u8; (size.0 * size.1 * 3) as usize];
     {
-        let root = BitMapBackend::with_buffer(&mut buf, SIZE).into_drawing_area();
-        draw(plot, &root).map_err(fail)?;
+        let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
+        figure.draw_on(&root).map_err(fail)?;
         root.present().map_err(|e| fail(e.to_string()))?;
     }
     let rgb: Vec<[u8; 3]> = buf.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-    crate::image::write_rgb8_png(SIZE.0 as usize, SIZE.1 as usize, &rgb, &png)
+    crate::image::write_rgb8_png(size.0 as usize, size.1 as usize, &rgb, &png)
 }
 
 /// Draws the two panels of `plot` on `root`.

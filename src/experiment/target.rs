@@ -8,17 +8,18 @@
 //! Depends only on the records of `jobs`, [`super::summary`], [`super::tables::Table`] and plotters.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
+use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::chart::{PALETTE, font, tick};
+use super::chart::{Drawing, PALETTE, font, save_drawing, tick};
 use super::figures::Figure;
 use super::jobs::Record;
 use super::summary::{Summary, ok};
 use super::tables::Table;
 use super::ticks::log_ticks;
-use crate::error::{Error, Result};
+use crate::error::Result;
 
 /// The parameter swept.
 const PARAM: &str = "targeterror";
@@ -113,7 +114,7 @@ pub fn figures(records: &[Record], out: &Path) -> Result<Vec<Figure>> {
             }
         }
         let svg = out.join(format!("{app}-target-vs-achieved.svg"));
-        draw_svg_and_png(app, &lines, &svg)?;
+        save_drawing(&TargetChart { app, lines }, (700, 600), &svg)?;
         figures.push(Figure {
             svg,
             scene: "all scenes".into(),
@@ -130,29 +131,22 @@ pub fn figures(records: &[Record], out: &Path) -> Result<Vec<Figure>> {
 
 type Lines<'a> = BTreeMap<&'a str, Vec<(f64, f64, f64, f64)>>;
 
-fn draw_svg_and_png(app: &str, lines: &Lines<'_>, path: &Path) -> Result<()> {
-    let fail = |e: String| Error::file(path, format!("cannot draw the chart: {e}"));
-    const SIZE: (u32, u32) = (700, 600);
-    {
-        let root = SVGBackend::new(path, SIZE).into_drawing_area();
-        draw(app, lines, &root).map_err(fail)?;
-        root.present().map_err(|e| fail(e.to_string()))?;
+/// One application's chart: its name and its lines.
+struct TargetChart<'a> {
+    app: &'a str,
+    lines: Lines<'a>,
+}
+
+impl Drawing for TargetChart<'_> {
+    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> std::result::Result<(), String> {
+        draw(self.app, &self.lines, root)
     }
-    let png: PathBuf = path.with_extension("png");
-    let mut buf = vec![0u8; (SIZE.0 * SIZE.1 * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, SIZE).into_drawing_area();
-        draw(app, lines, &root).map_err(fail)?;
-        root.present().map_err(|e| fail(e.to_string()))?;
-    }
-    let rgb: Vec<[u8; 3]> = buf.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-    crate::image::write_rgb8_png(SIZE.0 as usize, SIZE.1 as usize, &rgb, &png)
 }
 
 fn draw<DB: DrawingBackend>(
     app: &str,
     lines: &Lines<'_>,
-    root: &DrawingArea<DB, plotters::coord::Shift>,
+    root: &DrawingArea<DB, Shift>,
 ) -> std::result::Result<(), String> {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     root.fill(&WHITE).map_err(e)?;
