@@ -206,7 +206,7 @@ mod tests {
         Record {
             status: "ok".into(),
             scene: scene.into(),
-            application: "cacheao".into(),
+            application: "someapp".into(),
             placement: "refine".into(),
             method: "refine".into(),
             caches: 1000,
@@ -227,7 +227,7 @@ mod tests {
             vec![run("a", 0.1, 0.05, 0), run("a", 0.1, 0.05, 1), run("a", 0.02, 0.02, 0), run("b", 0.1, 0.04, 0)];
         let t = table(&records).unwrap();
         // a at 0.02: achieved 0.04 = 2 × the target (bold); a at 0.1: 0.1 (1.000); b at 0.1: 0.08 (0.800).
-        assert_eq!(t.rows[0][0], "a cacheao");
+        assert_eq!(t.rows[0][0], "a someapp");
         assert_eq!(t.rows[0][1], "0.02");
         assert_eq!(t.rows[0][5], "**2.000**");
         assert_eq!(t.rows[1][4], "0.1000 ± 0.0000");

@@ -1,6 +1,7 @@
 //! STAGE 4: where caches go. First-stage strategies see only the G-buffer (geometry); second-stage
-//! strategies also see the first-stage caches through a [`CacheOracle`] — positions, and the difference of
-//! two caches' gathering samples — never the record type, so every strategy works with every application
+//! strategies also see the first-stage caches through a [`CacheOracle`] — positions, the difference of
+//! two caches' gathering samples and (for refine's error estimate) what a cache's neighbours predict at its
+//! site — never the record type, so every strategy works with every application
 //! (ambient occlusion, irradiance, importance caching).
 //!
 //! Strategy names (what users type and reports print) are resolved by [`registry::strategy`].

@@ -5,11 +5,12 @@
 //! far away in the image (the coverage term), over a small uniform floor. Every round sees the caches of
 //! the rounds before it, so refinement follows the error that remains rather than the error one map
 //! predicted, and no pixel is left far from a cache it can use (the gaps that made the clustered
-//! placements lose to IM, experiments/notes/stability.md).
+//! placements lose to IM, experiments/notes/stability.md). Given a target error instead of a count, the
+//! rounds go on until refine's own estimate ([`super::estimate`]) says it is met.
 //!
-//! Depends on `gbuffer`, `cache` (the §5 selection), the DGS terms and draws of [`super::discontinuity`] and
-//! `sampling`; sees cache records only through [`CacheOracle::diff_many`]. Never depends on `render`,
-//! `scene` or an application.
+//! Depends on `gbuffer`, `cache` (the §5 selection), the DGS terms and draws of [`super::discontinuity`],
+//! the estimate and `sampling`; sees cache records only through [`CacheOracle::diff_many`] and
+//! [`CacheOracle::predict_many`]. Never depends on `render`, `scene` or an application.
 
 use rayon::prelude::*;
 
@@ -47,6 +48,11 @@ const STAGE_FALLBACK: u64 = 0x5246_0200;
 /// gets concentrated ones (the cube sharpens that further). Diff_max is left out: it peaks on single noisy
 /// pairs. The weights were chosen on the cache-AO cells of the stability map at 160×90 and 320×180,
 /// experiments/notes/refine.md and experiments/results/refine-tuning/.
+///
+/// With `PlacementParams::target` (`targeterror`) the budget is a ceiling: the first stage is 1/256 of it
+/// (the registry's `first_stage_budget`), and rounds of the same maps add caches until
+/// [`estimate::relative_rmse`] is at or below the target, each round sized from the last two estimates; every
+/// estimate is in `AdaptiveInfo::estimates`, and a target not met within the ceiling is a note.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Refine;
 

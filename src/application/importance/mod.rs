@@ -46,7 +46,7 @@ use crate::error::{Error, Result, Warnings};
 use crate::gbuffer::ShadingPoint;
 use crate::gbuffer::scale::SceneScale;
 use crate::parse::integrator::{IntegratorParams, Parameter};
-use crate::sampling::{Rng, Stratum};
+use crate::sampling::{Cdf, Rng, Stratum};
 use crate::scene::Scene;
 use crate::scene::accel::OccluderHint;
 use crate::scene::ray::RayCounters;
@@ -156,8 +156,8 @@ pub struct Lit<'s> {
     scene: &'s Scene,
     shading: Shading<'s>,
     vpls: Vpls,
-    /// Cumulative VPL flux (f64, last = total) for `sampling power`.
-    flux_cdf: Vec<f64>,
+    /// The VPLs' flux as a distribution, for `sampling power`.
+    flux: Cdf,
     /// The split: near VPLs and near-specular lobes.
     split: Split,
     /// The VPL tree of the lobe technique G.
@@ -187,14 +187,7 @@ impl Lit<'_> {
 
     /// A VPL drawn in proportion to its flux with 64 uniform bits `u`, with its probability.
     fn sample_power(&self, u: u64) -> Option<(usize, f64)> {
-        let total = *self.flux_cdf.last()?;
-        if total.is_nan() || total <= 0.0 {
-            return None;
-        }
-        let target = crate::sampling::unit_f64(u) * total;
-        let j = self.flux_cdf.partition_point(|&c| c <= target).min(self.flux_cdf.len() - 1);
-        let p = (self.flux_cdf[j] - if j == 0 { 0.0 } else { self.flux_cdf[j - 1] }) / total;
-        (p > 0.0).then_some((j, p))
+        self.flux.sample(crate::sampling::unit_f64(u))
     }
 }
 
@@ -331,18 +324,10 @@ impl Application for ImportanceCache {
                 vpls.paths
             ));
         }
-        let mut acc = 0.0f64;
-        let flux_cdf = vpls
-            .flux
-            .iter()
-            .map(|&f| {
-                acc += f as f64;
-                acc
-            })
-            .collect();
+        let flux = Cdf::new(vpls.flux.iter().copied());
         let split = Split::new(&vpls, self.split_cone.to_radians(), self.split_near * vpls.clamp2.sqrt());
         let lobes = LobeTree::new(&vpls, self.split_cone.to_radians(), self.lobe_cone.to_radians());
-        Ok(Lit { scene, shading, vpls, flux_cdf, split, lobes })
+        Ok(Lit { scene, shading, vpls, flux, split, lobes })
     }
 
     fn shading<'a, 's>(&self, cx: &'a Self::Prepared<'s>) -> Option<&'a Shading<'s>> {
