@@ -10,6 +10,14 @@
 //! spacing from its neighbours, where a pixel sits a fraction of a spacing from its caches: [`KAPPA`] is
 //! the ratio, measured (experiments/results/refine-target/).
 //!
+//! One refinement: a cache a pixel blends across a crease (its normal beyond the §5 normal filter of the
+//! pixel's) counts with the mean miss of the caches that were themselves predicted across a crease (most of
+//! their neighbours' weight beyond the filter), not with its own. It was meant for surfaces with no cache
+//! of their own at low density; measured, it moved none of calibration.csv's 28 estimates beyond the four
+//! decimals printed (its columns `power0` and `estimate_committed`), so the estimate behaves as the model
+//! above. It is in every committed result of refine-target; removing it is left for a change that re-runs
+//! them.
+//!
 //! Depends on `gbuffer`, `cache` (the §5 selection) and the oracle; never on an application or `render`.
 
 use glam::Vec3A;
