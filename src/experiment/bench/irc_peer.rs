@@ -48,13 +48,65 @@ use crate::os::{children_cpu_secs, process_cpu_secs};
 pub const INTEGRATOR: &str = <IrradianceCache as Application>::NAME;
 
 const SCENE: &str = "bitterli-cornell-box-v3";
-/// pbrt-v2's settings: (minweight, nsamples). Its defaults are 0.5 and 4096.
-const PBRT_V2_SETTINGS: [(f32, u32); 7] =
-    [(0.2, 4096), (0.5, 4096), (0.7, 4096), (0.9, 4096), (0.5, 256), (0.5, 1024), (0.5, 2048)];
-/// cachert's cache budgets.
+/// pbrt-v2's settings: (minweight, nsamples). Its defaults are 0.5 and 4096. Its two knobs (it has no
+/// `maxerror`: see its README) are swept along both axes and together, so that its cheapest setting at each
+/// error — its best point there — is among them: `minweight` 0.2–0.9 at 4096 paths per record, and `nsamples`
+/// 256–2048 at the default `minweight` and at 0.2 (fewer, cheaper records).
+const PBRT_V2_SETTINGS: [(f32, u32); 12] = [
+    (0.2, 4096),
+    (0.5, 4096),
+    (0.7, 4096),
+    (0.9, 4096),
+    (0.5, 256),
+    (0.5, 512),
+    (0.5, 1024),
+    (0.5, 2048),
+    (0.2, 256),
+    (0.2, 512),
+    (0.2, 1024),
+    (0.2, 2048),
+];
+/// The series name of a pbrt-v2 setting: the `minweight` sweep at 4096 paths, the `nsamples` sweep at the
+/// default `minweight`, and the `nsamples` sweep at another `minweight`.
+fn v2_series(minweight: f32, nsamples: u32) -> String {
+    match (minweight, nsamples) {
+        (_, 4096) => "pbrt-v2 minweight".into(),
+        (0.5, _) => "pbrt-v2 nsamples".into(),
+        (w, _) => format!("pbrt-v2 nsamples, minweight {w}"),
+    }
+}
+/// cachert's cache budgets at the default gathering grid.
 const BUDGETS: [usize; 6] = [1000, 2000, 3000, 3500, 4000, 8000];
-/// cachert's placements.
-const PLACEMENTS: [&str; 4] = ["vgc+dgs", "vgc", "im", "sd"];
+/// A budget that sets no `caches`: the integrator's default (the paper's density for the image's pixels).
+const DEFAULT_BUDGET: usize = 0;
+/// The default placement's budgets: its default one as well.
+const DEFAULT_SERIES_BUDGETS: [usize; 7] = [DEFAULT_BUDGET, 1000, 2000, 3000, 3500, 4000, 8000];
+/// One cachert series: a placement over cache budgets, at the default gathering grid (64², as pbrt-v2's 4096
+/// paths per record) or a coarser one (fewer paths per cache, so more caches in the same time).
+struct CachertSeries {
+    placement: &'static str,
+    gather: Option<u32>,
+    budgets: &'static [usize],
+}
+/// cachert's series: the four placements at 64² paths per cache, and the default placement at 32² and 16².
+const CACHERT_SERIES: [CachertSeries; 6] = [
+    CachertSeries { placement: "vgc+dgs", gather: None, budgets: &DEFAULT_SERIES_BUDGETS },
+    CachertSeries { placement: "vgc", gather: None, budgets: &BUDGETS },
+    CachertSeries { placement: "im", gather: None, budgets: &BUDGETS },
+    CachertSeries { placement: "sd", gather: None, budgets: &BUDGETS },
+    CachertSeries { placement: "vgc+dgs", gather: Some(32), budgets: &[2000, 4000, 8000, 16000] },
+    CachertSeries { placement: "vgc+dgs", gather: Some(16), budgets: &[4000, 8000, 16000, 32000] },
+];
+
+impl CachertSeries {
+    /// The series' name in the table and chart: the placement, and the grid when it is not the default.
+    fn name(&self) -> String {
+        match self.gather {
+            Some(n) => format!("{} gather {n}", self.placement),
+            None => self.placement.into(),
+        }
+    }
+}
 /// The most runs of pbrt-v2's defaults with different random numbers (the last at 8× `--ncores` 32).
 const MAX_V2_RUNS: usize = 6;
 
@@ -93,6 +145,22 @@ pub struct PeerRow {
     /// Standard deviations over the seeds of `rmse`, `rmse_off_light`, `flip` and `rmse_light` (`None` for
     /// one run).
     pub sd: Option<[f64; 4]>,
+    /// For a cachert row, pbrt-v2's best point at its error: the cheapest pbrt-v2 setting of the run whose
+    /// off-light RMSE is at or below the row's (`None` for pbrt-v2's rows, and where none is as accurate).
+    pub v2_best: Option<BestPoint>,
+}
+
+/// pbrt-v2's cheapest setting at least as accurate off the light as a cachert row ([`PeerRow::v2_best`]).
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct BestPoint {
+    /// The pbrt-v2 setting.
+    pub setting: String,
+    /// Its CPU seconds.
+    pub cpu_s: f64,
+    /// Its off-light RMSE.
+    pub rmse_off_light: f64,
+    /// The cachert row's CPU seconds over these (the issue's bar: at most 0.5).
+    pub cpu_ratio: f64,
 }
 
 /// pbrt-v2's default setting, the target's row.
@@ -134,7 +202,108 @@ fn summarise(renderer: &str, series: &str, setting: String, runs: &[Run]) -> Pee
             (Some(a), Some(b), Some(c), Some(d)) => Some([a, b, c, d]),
             _ => None,
         },
+        v2_best: None,
     }
+}
+
+/// Fills [`PeerRow::v2_best`] of every cachert row from the pbrt-v2 rows of `rows`.
+fn set_best_points(rows: &mut [PeerRow]) {
+    let v2: Vec<BestPoint> = rows
+        .iter()
+        .filter(|r| r.renderer == "pbrt-v2")
+        .map(|r| BestPoint {
+            setting: r.setting.clone(),
+            cpu_s: r.cpu_s,
+            rmse_off_light: r.rmse_off_light,
+            cpu_ratio: 0.0,
+        })
+        .collect();
+    for r in rows.iter_mut().filter(|r| r.renderer == "cachert") {
+        let best =
+            v2.iter().filter(|v| v.rmse_off_light <= r.rmse_off_light).min_by(|a, b| a.cpu_s.total_cmp(&b.cpu_s));
+        r.v2_best = best.map(|b| BestPoint { cpu_ratio: r.cpu_s / b.cpu_s, ..b.clone() });
+    }
+}
+
+/// pbrt-v2's front: its settings that no cheaper setting matches or beats off the light, cheapest first.
+fn v2_front(rows: &[PeerRow]) -> Vec<&PeerRow> {
+    let mut v2: Vec<&PeerRow> = rows.iter().filter(|r| r.renderer == "pbrt-v2").collect();
+    v2.sort_by(|a, b| a.cpu_s.total_cmp(&b.cpu_s));
+    let mut front: Vec<&PeerRow> = Vec::new();
+    for r in v2 {
+        if front.last().is_none_or(|f| r.rmse_off_light < f.rmse_off_light) {
+            front.push(r);
+        }
+    }
+    front
+}
+
+/// The CPU seconds a series (its rows) needs to reach `target` off the light, and whether that is only a
+/// bound: between the two consecutive points (by CPU time) that first bracket it, log CPU time interpolated
+/// linearly in log RMSE; the cheapest point itself (a bound: less might do) when it already reaches it;
+/// `None` when no point does.
+fn cpu_to_reach(series: &[&PeerRow], target: f64) -> Option<(f64, bool)> {
+    let mut pts: Vec<(f64, f64)> = series.iter().map(|r| (r.cpu_s, r.rmse_off_light)).collect();
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let first = *pts.first()?;
+    if first.1 <= target {
+        return Some((first.0, true));
+    }
+    pts.windows(2).find(|w| w[0].1 > target && w[1].1 <= target).map(|w| {
+        let f = (w[0].1.ln() - target.ln()) / (w[0].1.ln() - w[1].1.ln());
+        ((w[0].0.ln() + f * (w[1].0.ln() - w[0].0.ln())).exp(), false)
+    })
+}
+
+/// The verdict against pbrt-v2's best point: at the error of each setting on pbrt-v2's front, the cheapest
+/// cachert series' CPU time there over that setting's; the bar (at most 0.5×) holds when it holds at every
+/// front setting cachert reaches.
+fn front_verdict(rows: &[PeerRow]) -> String {
+    let front = v2_front(rows);
+    if front.is_empty() {
+        return String::new();
+    }
+    let mut s = String::from(
+        "\nAgainst pbrt-v2's best point (the bar: at most 0.5x its CPU time at equal or lower RMSE off the light). \
+         pbrt-v2's front (its settings that no cheaper one matches off the light) and, at each one's error, the \
+         cheapest cachert series there (CPU time interpolated between the two budgets that bracket the error, \
+         log-log):\n",
+    );
+    let names = series_names(rows.iter().filter(|r| r.renderer == "cachert"));
+    let mut ratios: Vec<(f64, &str)> = Vec::new();
+    for v in &front {
+        let best = names
+            .iter()
+            .filter_map(|name| {
+                let pts: Vec<&PeerRow> = rows.iter().filter(|r| r.renderer == "cachert" && r.series == *name).collect();
+                cpu_to_reach(&pts, v.rmse_off_light).map(|(t, bound)| (t, bound, *name))
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        let head = format!("- pbrt-v2 {}: {:.5} off the light in {:.1} CPU s", v.setting, v.rmse_off_light, v.cpu_s);
+        let _ = match best {
+            Some((t, bound, name)) => {
+                ratios.push((t / v.cpu_s, &v.setting));
+                writeln!(
+                    s,
+                    "{head}; cachert {name} in {}{t:.1} CPU s ({:.2}x)",
+                    if bound { "at most " } else { "" },
+                    t / v.cpu_s
+                )
+            }
+            None => writeln!(s, "{head}; no cachert series of this run reaches it"),
+        };
+    }
+    let worst = ratios.iter().max_by(|a, b| a.0.total_cmp(&b.0));
+    let _ = match worst {
+        Some((r, setting)) => writeln!(
+            s,
+            "Verdict: cachert needs at most {r:.2}x pbrt-v2's CPU time at every front setting it reaches (the \
+             most at {setting}): the 0.5x bar is {}.",
+            if *r <= 0.5 { "met" } else { "not met" }
+        ),
+        None => writeln!(s, "Verdict: no front setting of pbrt-v2 is reached by cachert in this run."),
+    };
+    s
 }
 
 /// The series of `rows`, each once, in the order they first appear.
@@ -388,7 +557,7 @@ pub fn run(args: &BenchArgs) -> Result<String> {
     for (minweight, nsamples) in PBRT_V2_SETTINGS {
         let t = set_param(&v2_text, "\"float minweight\"", &minweight.to_string())?;
         let t = set_param(&t, "\"integer nsamples\"", &nsamples.to_string())?;
-        let series = if nsamples == 4096 { "pbrt-v2 minweight" } else { "pbrt-v2 nsamples" };
+        let series = v2_series(minweight, nsamples);
         let setting = format!("minweight {minweight} nsamples {nsamples}");
         let repeats = if setting == V2_DEFAULTS { (args.seeds as usize).min(MAX_V2_RUNS) } else { 1 };
         let mut runs: Vec<Run> = Vec::new();
@@ -401,19 +570,32 @@ pub fn run(args: &BenchArgs) -> Result<String> {
             }
             runs.push(run);
         }
-        push(summarise("pbrt-v2", series, setting, &runs));
+        push(summarise("pbrt-v2", &series, setting, &runs));
     }
     let _ = std::fs::remove_dir_all(&scratch);
-    for placement in PLACEMENTS {
-        for caches in BUDGETS {
-            let mut runs = Vec::new();
-            for seed in 0..u64::from(args.seeds) {
-                let (image, times, split) = render_cachert(&text, &ref_path, placement, caches, seed, args.nthreads)?;
-                runs.push(measure(&image, times, split)?);
+    for series in &CACHERT_SERIES {
+        for &caches in series.budgets {
+            let mut set = vec![("placement".into(), series.placement.into())];
+            if caches != DEFAULT_BUDGET {
+                set.push(("caches".into(), caches.to_string()));
             }
-            push(summarise("cachert", placement, format!("caches {caches}"), &runs));
+            if let Some(n) = series.gather {
+                set.push(("gather".into(), n.to_string()));
+            }
+            let (mut runs, mut placed) = (Vec::new(), None);
+            for seed in 0..u64::from(args.seeds) {
+                let run = render_cachert(&text, &ref_path, &set, seed, args.nthreads)?;
+                runs.push(measure(&run.image, run.times, run.split)?);
+                placed = placed.or(run.placed);
+            }
+            let setting = match placed {
+                Some(n) if caches == DEFAULT_BUDGET => format!("caches default ({n})"),
+                _ => format!("caches {caches}"),
+            };
+            push(summarise("cachert", &series.name(), setting, &runs));
         }
     }
+    set_best_points(&mut rows);
     if let Some(json) = &args.json {
         let s = serde_json::to_string_pretty(&rows).map_err(|e| Error::usage(e.to_string()))?;
         std::fs::write(json, s + "\n").map_err(|e| Error::file(json, e.to_string()))?;
@@ -421,25 +603,30 @@ pub fn run(args: &BenchArgs) -> Result<String> {
     if let Some(chart) = &args.chart {
         super::peer_chart::write(&rows, chart)?;
     }
-    Ok(table(&rows) + &verdict(&rows))
+    Ok(table(&rows) + &verdict(&rows) + &front_verdict(&rows))
 }
 
-/// One cachert render of the peer scene (`text`, read as if from `ref_path`) at a placement, budget and seed:
-/// the image, its [CPU, wall] seconds (scene loading included) and the [cache, shading] split of the wall time.
+/// What one cachert render of the peer scene gave.
+struct CachertRun {
+    image: Image,
+    /// CPU and wall seconds, scene loading included.
+    times: [f64; 2],
+    /// The wall seconds of making the caches and of the per-pixel work.
+    split: [Option<f64>; 2],
+    /// The caches placed.
+    placed: Option<usize>,
+}
+
+/// One cachert render of the peer scene (`text`, read as if from `ref_path`) with the integrator parameters
+/// `set` (placement, budget, grid) at a seed.
 fn render_cachert(
     text: &str,
     ref_path: &Path,
-    placement: &str,
-    caches: usize,
+    set: &[(String, String)],
     seed: u64,
     threads: usize,
-) -> Result<(Image, [f64; 2], [Option<f64>; 2])> {
-    let settings = RenderSettings {
-        seed,
-        threads: Some(threads),
-        set: vec![("placement".into(), placement.into()), ("caches".into(), caches.to_string())],
-        ..Default::default()
-    };
+) -> Result<CachertRun> {
+    let settings = RenderSettings { seed, threads: Some(threads), set: set.to_vec(), ..Default::default() };
     let (cpu0, t) = (process_cpu_secs().unwrap_or(0.0), Instant::now());
     let loaded = load_str(text, ref_path, LoadOptions::default())?;
     let out = render(&loaded.scene, loaded.integrator.as_ref(), &settings, &mut Warnings::default())?;
@@ -449,7 +636,8 @@ fn render_cachert(
         [t.initial_computation + t.adaptive_computation, t.render + t.per_pixel_term]
     });
     let split = split.map_or([None, None], |[a, b]| [Some(a), Some(b)]);
-    Ok((out.image, [cpu, wall], split))
+    let placed = out.cache.as_ref().map(|c| c.stats.total_caches);
+    Ok(CachertRun { image: out.image, times: [cpu, wall], split, placed })
 }
 
 fn format_row(r: &PeerRow) -> String {
@@ -458,7 +646,7 @@ fn format_row(r: &PeerRow) -> String {
         None => format!("{v:.digits$}"),
     };
     format!(
-        "| {} | {} | {} | {} | {:.1} | {:.1} | {} + {} | {} | {} | {} | {} | {:+.2}% | {:+.2}% |",
+        "| {} | {} | {} | {} | {:.1} | {:.1} | {} + {} | {} | {} | {} | {} | {:+.2}% | {:+.2}% | {} |",
         r.renderer,
         r.series,
         r.setting,
@@ -472,14 +660,15 @@ fn format_row(r: &PeerRow) -> String {
         with_sd(3, r.rmse_light, 5),
         with_sd(2, r.flip, 4),
         r.mean_pct,
-        r.mean_off_light_pct
+        r.mean_off_light_pct,
+        r.v2_best.as_ref().map_or("–".into(), |b| format!("{:.2}x ({})", b.cpu_ratio, b.setting)),
     )
 }
 
 fn table(rows: &[PeerRow]) -> String {
     let mut s = String::from(
-        "| renderer | series | setting | seeds | CPU s | wall s | wall s: caching + pixels | RMSE | RMSE off-light | RMSE share of light + border | HDR-FLIP | mean | off-light mean |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| renderer | series | setting | seeds | CPU s | wall s | wall s: caching + pixels | RMSE | RMSE off-light | RMSE share of light + border | HDR-FLIP | mean | off-light mean | CPU / pbrt-v2's cheapest as accurate off the light |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let _ = writeln!(s, "{}", format_row(r));
@@ -594,6 +783,77 @@ mod tests {
             "{v}"
         );
         assert_eq!(verdict(&rows[1..]), "", "no verdict without pbrt-v2's defaults");
+    }
+
+    #[test]
+    fn each_cachert_row_is_set_against_the_cheapest_pbrt_v2_setting_at_least_as_accurate() {
+        let mut rows = vec![
+            row("pbrt-v2", "pbrt-v2 nsamples", "minweight 0.5 nsamples 256", 7.0, [0.006, 0.0026]),
+            row("pbrt-v2", "pbrt-v2 nsamples", "minweight 0.5 nsamples 1024", 14.0, [0.005, 0.0021]),
+            row("pbrt-v2", "pbrt-v2 minweight", V2_DEFAULTS, 40.0, [0.005, 0.0020]),
+            row("cachert", "vgc", "caches 1000", 8.0, [0.006, 0.0027]),
+            row("cachert", "vgc", "caches 2000", 12.0, [0.005, 0.0021]),
+            row("cachert", "vgc", "caches 8000", 30.0, [0.005, 0.0017]),
+        ];
+        set_best_points(&mut rows);
+        assert!(rows[..3].iter().all(|r| r.v2_best.is_none()), "pbrt-v2's own rows get none");
+        // Every pbrt-v2 setting is at least as accurate as 0.0027: the cheapest of them is the best point.
+        assert_eq!(rows[3].v2_best.as_ref().map(|b| b.setting.as_str()), Some("minweight 0.5 nsamples 256"));
+        let b = rows[4].v2_best.as_ref().unwrap();
+        assert_eq!((b.setting.as_str(), b.cpu_s), ("minweight 0.5 nsamples 1024", 14.0), "equal error counts");
+        assert!((b.cpu_ratio - 12.0 / 14.0).abs() < 1e-12);
+        assert!(rows[5].v2_best.is_none(), "nothing of pbrt-v2's reaches 0.0017");
+        assert!(format_row(&rows[4]).ends_with("| 0.86x (minweight 0.5 nsamples 1024) |"), "{}", format_row(&rows[4]));
+    }
+
+    #[test]
+    fn the_time_to_reach_an_error_is_interpolated_log_log_between_the_budgets_that_bracket_it() {
+        let a = row("cachert", "vgc", "caches 1000", 10.0, [0.005, 0.004]);
+        let b = row("cachert", "vgc", "caches 4000", 40.0, [0.005, 0.001]);
+        let c = row("cachert", "vgc", "caches 2000", 20.0, [0.005, 0.002]);
+        // Out of order on purpose: points are taken by CPU time. 0.002 is met exactly at 20 s; 0.0028 lies
+        // between 10 s and 20 s, at the fraction ln(4/2.8)/ln(4/2) of the way in log time.
+        let pts = [&b, &a, &c];
+        let (t, bound) = cpu_to_reach(&pts, 0.002).unwrap();
+        assert!(!bound && (t - 20.0).abs() < 1e-9, "{t}");
+        let (t, bound) = cpu_to_reach(&pts, 0.0028).unwrap();
+        let f = (4.0f64 / 2.8).ln() / 2f64.ln();
+        assert!(!bound && (t - 10.0 * 2f64.powf(f)).abs() < 1e-9, "{t}");
+        assert_eq!(cpu_to_reach(&pts, 0.005), Some((10.0, true)), "the cheapest point already does: a bound");
+        assert_eq!(cpu_to_reach(&pts, 0.0005), None);
+    }
+
+    #[test]
+    fn the_front_verdict_takes_the_worst_ratio_over_pbrt_v2s_front() {
+        let rows = [
+            row("pbrt-v2", "pbrt-v2 nsamples", "minweight 0.5 nsamples 256", 10.0, [0.006, 0.0026]),
+            // Dearer than the next and less accurate: not on the front.
+            row("pbrt-v2", "pbrt-v2 minweight", "minweight 0.2 nsamples 4096", 30.0, [0.005, 0.0022]),
+            row("pbrt-v2", "pbrt-v2 nsamples", "minweight 0.5 nsamples 1024", 16.0, [0.005, 0.0021]),
+            row("pbrt-v2", "pbrt-v2 minweight", "minweight 0.9 nsamples 4096", 60.0, [0.005, 0.0015]),
+            row("cachert", "vgc", "caches 1000", 4.0, [0.006, 0.0026]),
+            row("cachert", "vgc", "caches 2000", 7.0, [0.005, 0.0021]),
+            row("cachert", "im", "caches 1000", 3.0, [0.006, 0.0030]),
+            row("cachert", "im", "caches 2000", 6.0, [0.005, 0.0024]),
+        ];
+        let front: Vec<&str> = v2_front(&rows).iter().map(|r| r.setting.as_str()).collect();
+        assert_eq!(front, ["minweight 0.5 nsamples 256", "minweight 0.5 nsamples 1024", "minweight 0.9 nsamples 4096"]);
+        let v = front_verdict(&rows);
+        // At 0.0026 vgc's cheapest point already reaches it (4 s, a bound); im would need 3·2^0.64 ≈ 4.7 s.
+        assert!(
+            v.contains("256: 0.00260 off the light in 10.0 CPU s; cachert vgc in at most 4.0 CPU s (0.40x)"),
+            "{v}"
+        );
+        assert!(
+            v.contains("nsamples 1024: 0.00210 off the light in 16.0 CPU s; cachert vgc in 7.0 CPU s (0.44x)"),
+            "{v}"
+        );
+        assert!(v.contains("nsamples 4096: 0.00150 off the light in 60.0 CPU s; no cachert series"), "{v}");
+        assert!(
+            v.contains("at most 0.44x pbrt-v2's CPU time") && v.contains("(the most at minweight 0.5 nsamples 1024)")
+        );
+        assert!(v.contains("the 0.5x bar is met"), "{v}");
+        assert_eq!(front_verdict(&rows[4..]), "", "no pbrt-v2 rows, no verdict");
     }
 
     #[test]
