@@ -189,9 +189,13 @@ pub trait Application: Sync + Sized {
     /// light paths of the scene's own (the default: none).
     const PATH_DEPTH: Option<&'static str> = None;
 
-    /// The paper's cache budget for this application at 1920×1080 (ALGORITHMS.md §7): the default budget
-    /// `caches` scales it to the image's pixels.
+    /// The paper's cache budget for this application at 1920×1080 (ALGORITHMS.md §7): experiments give
+    /// their densities as multiples of it.
     const PAPER_CACHES: usize = 120_000;
+
+    /// The default budget `caches` at 1920×1080, scaled to the image's pixels: the paper's
+    /// ([`Application::PAPER_CACHES`]) unless the application measured a better one for its defaults.
+    const DEFAULT_CACHES: usize = Self::PAPER_CACHES;
 
     /// What the studies know of the application (the cache driver never reads it).
     const STUDY: Study<Self> = Study::NONE;

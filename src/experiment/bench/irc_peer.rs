@@ -75,35 +75,38 @@ fn v2_series(minweight: f32, nsamples: u32) -> String {
         (w, _) => format!("pbrt-v2 nsamples, minweight {w}"),
     }
 }
-/// cachert's cache budgets at the default gathering grid.
+/// cachert's cache budgets at the paper's gathering grid.
 const BUDGETS: [usize; 6] = [1000, 2000, 3000, 3500, 4000, 8000];
-/// A budget that sets no `caches`: the integrator's default (the paper's density for the image's pixels).
+/// A budget that sets no `caches`: the integrator's default.
 const DEFAULT_BUDGET: usize = 0;
-/// The default placement's budgets: its default one as well.
-const DEFAULT_SERIES_BUDGETS: [usize; 7] = [DEFAULT_BUDGET, 1000, 2000, 3000, 3500, 4000, 8000];
-/// One cachert series: a placement over cache budgets, at the default gathering grid (64², as pbrt-v2's 4096
-/// paths per record) or a coarser one (fewer paths per cache, so more caches in the same time).
+/// The paper's gathering grid side (64² = 4096 paths per cache, as pbrt-v2's default `nsamples`).
+const PAPER_GATHER: u32 = 64;
+/// One cachert series: a placement over cache budgets, at a gathering grid (`None`: the integrator's
+/// defaults for both the grid and the budget).
 struct CachertSeries {
     placement: &'static str,
     gather: Option<u32>,
     budgets: &'static [usize],
 }
-/// cachert's series: the four placements at 64² paths per cache, and the default placement at 32² and 16².
-const CACHERT_SERIES: [CachertSeries; 6] = [
-    CachertSeries { placement: "vgc+dgs", gather: None, budgets: &DEFAULT_SERIES_BUDGETS },
-    CachertSeries { placement: "vgc", gather: None, budgets: &BUDGETS },
-    CachertSeries { placement: "im", gather: None, budgets: &BUDGETS },
-    CachertSeries { placement: "sd", gather: None, budgets: &BUDGETS },
+/// cachert's series: the four placements at the paper's 64² paths per cache, the default placement at 32² and
+/// 16² with more caches, and the integrator's defaults.
+const CACHERT_SERIES: [CachertSeries; 7] = [
+    CachertSeries { placement: "vgc+dgs", gather: Some(PAPER_GATHER), budgets: &BUDGETS },
+    CachertSeries { placement: "vgc", gather: Some(PAPER_GATHER), budgets: &BUDGETS },
+    CachertSeries { placement: "im", gather: Some(PAPER_GATHER), budgets: &BUDGETS },
+    CachertSeries { placement: "sd", gather: Some(PAPER_GATHER), budgets: &BUDGETS },
     CachertSeries { placement: "vgc+dgs", gather: Some(32), budgets: &[2000, 4000, 8000, 16000] },
     CachertSeries { placement: "vgc+dgs", gather: Some(16), budgets: &[4000, 8000, 16000, 32000] },
+    CachertSeries { placement: "vgc+dgs", gather: None, budgets: &[DEFAULT_BUDGET] },
 ];
 
 impl CachertSeries {
-    /// The series' name in the table and chart: the placement, and the grid when it is not the default.
+    /// The series' name in the table and chart: the placement, and the grid when it is not the paper's.
     fn name(&self) -> String {
         match self.gather {
+            Some(PAPER_GATHER) => self.placement.into(),
             Some(n) => format!("{} gather {n}", self.placement),
-            None => self.placement.into(),
+            None => format!("{} defaults", self.placement),
         }
     }
 }

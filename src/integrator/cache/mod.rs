@@ -69,7 +69,7 @@ fn render_pass<A: Application>(
     let term = plan.added_per_pixel;
     let overrides = cache_sample_settings(scene, params, settings, term.is_some(), warnings);
     let mut cs =
-        CacheSettings::from_params(&p, &overrides, scene, scale, A::PAPER_CACHES, settings.seed, settings.progress)?;
+        CacheSettings::from_params(&p, &overrides, scene, scale, A::DEFAULT_CACHES, settings.seed, settings.progress)?;
     if !plan.dgs_geometry {
         cs.params.dgs.geometry = false;
     }

@@ -20,11 +20,12 @@ pub const PLACEMENT: ParamDef<String> = ParamDef::text(
     "vgc+dgs",
     "`none` (per-sample reference), `im`, `sd`, `sd+as`, `vgc`, `vgc+dgs`, `refine`, `vgc+as`, `vgc+dgs:diff`, `vgc+dgs:geom`",
 );
-/// `caches`: the budget N_c (default from the application's paper budget and the image's pixels).
+/// `caches`: the budget N_c (default from the application's default budget at 1920×1080 and the image's
+/// pixels).
 pub const CACHES: ParamDef<i64> = ParamDef::computed(
     "caches",
     "B × pixels / (1920×1080)",
-    "total cache budget N_c; B is the paper's budget for the application at 1920×1080 (on its page in docs/integrators/)",
+    "total cache budget N_c; B is the application's default budget at 1920×1080, the paper's or a measured better one (on its page in docs/integrators/)",
 )
 .valid(Valid::AtLeast { lo: 1.0, finite: true });
 /// `ratio`: R.
@@ -201,18 +202,18 @@ pub struct CacheSettings {
 
 impl CacheSettings {
     /// Reads the parameters of [`PARAMETERS`] for `scene`, whose length scale is `scale` (the application's
-    /// paper budget at 1920×1080 is `paper_caches`); `o` wins over them.
+    /// default budget at 1920×1080 is `default_caches_1080p`); `o` wins over them.
     pub fn from_params(
         p: &IntegratorParams<'_>,
         o: &CacheOverrides,
         scene: &Scene,
         scale: SceneScale,
-        paper_caches: usize,
+        default_caches_1080p: usize,
         seed: u64,
         progress: bool,
     ) -> Result<Self> {
         let [w, h] = scene.film.cropped_bounds().size();
-        let default_caches = ((w * h) as f64 * paper_caches as f64 / PAPER_PIXELS).round().max(1.0) as i64;
+        let default_caches = ((w * h) as f64 * default_caches_1080p as f64 / PAPER_PIXELS).round().max(1.0) as i64;
         // Read even when overridden, so a written value counts as read (the override wins silently).
         let written = p.written_or(&CACHES, default_caches)?;
         let caches = p.check(&CACHES, o.caches.map_or(written, |c| c as i64))?;
