@@ -72,10 +72,11 @@ impl Output {
 /// (4096, ALGORITHMS.md §6.2), and it goes with three times the paper's budget ([`IrradianceCache`]'s
 /// `DEFAULT_CACHES`): measured on the Cornell box at 256×256 against pbrt-v3's path image
 /// (`experiments/results/irc-peer/peer.md`, 5 seeds), the paper's setting gave 0.00252 off-light RMSE in
-/// 10.3 CPU s and 32² paths × 4000 caches 0.00190 in 10.9 s; on sibenik at 240×135 (one seed, against
-/// cachert's `path` at 512 samples) 0.01676 RMSE / 0.0763 HDR-FLIP in 18.0 CPU s against 0.01649 / 0.0678 in
-/// 15.0 s. Fewer paths per cache and more caches: interpolation error falls faster with density than the
-/// records' noise rises, and the records' noise is blended over several caches at every sample.
+/// 10.3 CPU s and 32² paths × 4000 caches 0.00190 in 10.9 s; on sibenik at 240×135 (3 seeds, against
+/// cachert's `path` at 512 samples; `experiments/results/irc-default/table.md`) the paper's setting gave RMSE
+/// 0.01685 and HDR-FLIP 0.0777 in 18.2 CPU s, this default 0.01647 and 0.0659 in 14.1 s. Fewer paths per
+/// cache and more caches: interpolation error falls faster with density than the records' noise rises, and
+/// the records' noise is blended over several caches at every sample.
 /// Experiments that reproduce the paper write `gather = 64` (their specs do).
 pub const GATHER: ParamDef<i64> =
     ParamDef::int("gather", 32, "gathering grid side: gather² paths per cache").between(1, 256);
