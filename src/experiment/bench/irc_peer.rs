@@ -7,8 +7,8 @@
 //! samples, `maxindirectdepth` 4) at its `minweight` settings 0.2–0.9 and `nsamples` 256–4096; its scene is
 //! copied to a scratch folder with the one parameter changed, and its image is written there. cachert renders
 //! `path-ref.pbrt` with the Integrator replaced by `irradiancecache` `output full` `maxdepth 4` (the same
-//! light paths as pbrt-v3 `path` maxdepth 5) and the same Sampler, over cache budgets and placements, in
-//! this process. CPU time is user + system of the whole render (pbrt-v2: its child process, parsing
+//! light paths as pbrt-v3 `path` maxdepth 5) and the same Sampler, over cache budgets, placements and
+//! gathering grids ([`CACHERT_SERIES`]), in this process. CPU time is user + system of the whole render (pbrt-v2: its child process, parsing
 //! included; cachert: parsing to image). With `--seeds N` every cachert row is rendered at seeds 0..N−1 and
 //! shows the mean of its figures and the standard deviation of its errors over the seeds. pbrt-v2 takes no
 //! seed, but its render pass seeds each of its tasks by the task's number, and it makes more tasks for more
@@ -19,10 +19,12 @@
 //! Its other settings are single runs. Besides the whole image and the pixels off the light, each row gives
 //! the share of the whole image's RMSE held by the emitter and its border (√(whole² − off²) over the whole
 //! image's pixels): the estimate at the scene's pixel samples of how much of each pixel the emitter covers,
-//! which no cache enters. After the table, the target is checked against pbrt-v2's defaults: for
-//! each placement, the cheapest budget within half of their CPU time that reaches their error off the light,
-//! and whether it also does over the whole image. A benchmark prints figures from one run and asserts
-//! nothing.
+//! which no cache enters. Each cachert row also names pbrt-v2's best point at its error, the cheapest pbrt-v2
+//! setting at least as accurate off the light ([`set_best_points`]). After the table come two verdicts:
+//! against pbrt-v2's defaults, for each cachert series the cheapest budget within half of their CPU time that
+//! reaches their error off the light, and whether it also does over the whole image; and against pbrt-v2's
+//! front ([`front_verdict`]), cachert's CPU time at the error of each setting no cheaper pbrt-v2 setting
+//! matches, over that setting's. A benchmark prints figures from one run and asserts nothing.
 
 use std::fmt::Write as _;
 use std::path::Path;
