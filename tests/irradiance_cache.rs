@@ -437,6 +437,17 @@ fn a_budget_of_zero_is_an_error_and_one_cache_is_enough_in_the_furnace() {
 }
 
 #[test]
+fn the_default_is_32_squared_paths_and_three_times_the_papers_budget() {
+    // 16×16 pixels: the paper's 40000 caches at 1920×1080 would give round(4.94) = 5, three times it
+    // round(14.81) = 15 (the defaults measured in experiments/results/irc-peer and irc-default).
+    let out = run(&furnace(true, 16), &[("placement", "im")]).unwrap();
+    let c = out.cache.as_ref().unwrap();
+    assert_eq!(c.stats.total_caches, 15);
+    assert_eq!(c.settings.get("gather"), Some(&serde_json::Value::from(32)), "{:?}", c.settings);
+    assert_all_near("defaults", &out.image, furnace_indirect(3));
+}
+
+#[test]
 fn more_caches_than_pixels_caches_every_pixel_with_a_note() {
     for p in &PLACEMENTS[1..] {
         let out = run(&furnace(true, 8), &[("placement", p), ("caches", "1000"), ("gather", "8")]).unwrap();
