@@ -40,7 +40,7 @@ pub struct PixelSamples {
 }
 
 /// How many dimension keys [`PixelSamples`] remembers per pixel (later dimensions are hashed each time).
-const KEPT_KEYS: usize = 16;
+const KEPT_KEYS: usize = 64;
 
 /// Stage tag of camera-sample streams in random keys.
 const STAGE_CAMERA: u64 = 0x63616d;
