@@ -71,7 +71,7 @@ impl Output {
 /// `gather`: the side n of the gathering grid. The default is 32 (1024 paths per cache), not the paper's 64
 /// (4096, ALGORITHMS.md §6.2), and it goes with three times the paper's budget ([`IrradianceCache`]'s
 /// `DEFAULT_CACHES`): measured on the Cornell box at 256×256 against pbrt-v3's path image
-/// (`experiments/results/irc-peer/peer.md`, 5 seeds), the paper's setting gave 0.00252 off-light RMSE in
+/// (`experiments/results/irc-peer/peer-2026-11-27.md`, 5 seeds), the paper's setting gave 0.00252 off-light RMSE in
 /// 10.3 CPU s and 32² paths × 4000 caches 0.00190 in 10.9 s; on sibenik at 240×135 (3 seeds, against
 /// cachert's `path` at 512 samples; `experiments/results/irc-default/table.md`) the paper's setting gave RMSE
 /// 0.01685 and HDR-FLIP 0.0777 in 18.2 CPU s, this default 0.01647 and 0.0659 in 14.1 s. Fewer paths per
