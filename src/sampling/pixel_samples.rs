@@ -9,7 +9,7 @@
 //! `02sequence` sampler gives: its arrays are stratified across the pixel, not only within a sample).
 
 use crate::sampling::rng::{Rng, hash3, mix64};
-use crate::sampling::sequence::{permute, sobol02};
+use crate::sampling::sequence::{permute, permute_range, sobol02};
 
 /// How sample values are generated (what a scene's `Sampler` directive chooses).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -32,15 +32,47 @@ pub struct PixelSamples {
     dim: u64,
     rng: Rng,
     order_scratch: OrderScratch,
-    /// The keys of the first dimensions of `keys_pixel`'s samples (`keys_known` of them): every sample of a
-    /// pixel uses the same ones, so they are hashed once per pixel, not once per sample.
-    keys: [u64; KEPT_KEYS],
+    /// What the first dimensions of `keys_pixel`'s samples derive from their keys (`keys_known` of them):
+    /// every sample of a pixel uses the same ones, so they are hashed once per pixel, not once per sample.
+    dims: [Dim; KEPT_KEYS],
     keys_known: usize,
     keys_pixel: u64,
+    /// Per remembered dimension, a row of `spp` permuted sample indices (see [`Dim::row`]); allocated on the
+    /// first use, for at most [`TABLE_SPP`] samples per pixel.
+    rows: Vec<u32>,
+}
+
+/// What a remembered dimension of the current pixel derives from its key.
+#[derive(Clone, Copy, Debug, Default)]
+struct Dim {
+    /// hash3(seed, pixel, dimension).
+    key: u64,
+    /// The XOR scrambles of its points: the key's high half and the low half of `mix64(key)`.
+    scramble: [u32; 2],
+    /// Which permutation its row in [`PixelSamples::rows`] holds, from which sample on.
+    row: Row,
+}
+
+/// The permutation a dimension's row holds: the one [`PixelSamples::get2d`] visits the pixel's samples in,
+/// or the order of [`PixelSamples::array2d`]'s blocks (another key), each tabulated from the sample that
+/// first asked for it to the pixel's last. A pixel's samples are drawn in order, so one batch of
+/// independent [`permute`] evaluations replaces a chain of dependent multiplies on every draw (the draw's
+/// largest cost); a sample index before the row's start, or the other kind, is computed as before.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+enum Row {
+    /// Not tabulated.
+    #[default]
+    None,
+    /// `permute(i, spp, key as u32)` for i ≥ the start.
+    Points(u32),
+    /// `permute(i, spp, mix64(key ^ ARRAY_BLOCKS) as u32)` for i ≥ the start.
+    Blocks(u32),
 }
 
 /// How many dimension keys [`PixelSamples`] remembers per pixel (later dimensions are hashed each time).
 const KEPT_KEYS: usize = 64;
+/// The most samples per pixel whose permutations [`PixelSamples`] tabulates (64 rows of 256 indices: 64 KiB).
+const TABLE_SPP: u32 = 256;
 
 /// Stage tag of camera-sample streams in random keys.
 const STAGE_CAMERA: u64 = 0x63616d;
@@ -59,9 +91,10 @@ impl PixelSamples {
             dim: 0,
             rng: Rng::new(0),
             order_scratch: OrderScratch::default(),
-            keys: [0; KEPT_KEYS],
+            dims: [Dim::default(); KEPT_KEYS],
             keys_known: 0,
             keys_pixel: 0,
+            rows: Vec::new(),
         }
     }
 
@@ -79,20 +112,53 @@ impl PixelSamples {
         }
     }
 
-    /// The key of the next dimension: hash3(seed, pixel, dimension), remembered for the pixel's next samples.
-    fn dim_key(&mut self) -> u64 {
+    /// The next dimension: its key, scrambles and (when remembered) its slot in [`PixelSamples::dims`].
+    fn next_dim(&mut self) -> (u64, [u32; 2], Option<usize>) {
         self.dim += 1;
         let d = (self.dim - 1) as usize;
         if d < self.keys_known {
-            return self.keys[d];
+            let dim = &self.dims[d];
+            return (dim.key, dim.scramble, Some(d));
         }
-        let k = hash3(self.seed, self.pixel_key, self.dim);
+        let key = hash3(self.seed, self.pixel_key, self.dim);
+        let scramble = [(key >> 32) as u32, mix64(key) as u32];
         // Dimensions are drawn in order, so an unknown one is the next to remember.
         if d == self.keys_known && d < KEPT_KEYS {
-            self.keys[d] = k;
+            self.dims[d] = Dim { key, scramble, row: Row::None };
             self.keys_known += 1;
+            return (key, scramble, Some(d));
         }
-        k
+        (key, scramble, None)
+    }
+
+    /// `permute(self.index, spp, perm_key)`, from remembered dimension `slot`'s row when it holds `want`'s
+    /// permutation (`want` names the kind; its start is ignored), tabulating the row on its first use.
+    #[inline]
+    fn permuted(&mut self, slot: Option<usize>, want: Row, perm_key: u32) -> u32 {
+        let (spp, i) = (self.spp, self.index);
+        let Some(d) = slot.filter(|_| spp <= TABLE_SPP && i < spp) else {
+            return permute(i, spp, perm_key);
+        };
+        let n = spp as usize;
+        let row = &mut self.dims[d].row;
+        let tabulated = match (*row, want) {
+            (Row::Points(from), Row::Points(_)) | (Row::Blocks(from), Row::Blocks(_)) => i >= from,
+            _ => false,
+        };
+        if !tabulated {
+            if *row != Row::None {
+                return permute(i, spp, perm_key);
+            }
+            *row = match want {
+                Row::Blocks(_) => Row::Blocks(i),
+                _ => Row::Points(i),
+            };
+            if self.rows.is_empty() {
+                self.rows = vec![0; KEPT_KEYS * n];
+            }
+            permute_range(i, &mut self.rows[d * n + i as usize..(d + 1) * n], spp, perm_key);
+        }
+        self.rows[d * n + i as usize]
     }
 
     /// The next two dimensions: stratified across the pixel's samples (or uniform for `random`).
@@ -100,9 +166,9 @@ impl PixelSamples {
         match self.kind {
             SamplerKind::Random => self.rng.uniform2(),
             SamplerKind::Stratified => {
-                let k = self.dim_key();
-                let i = permute(self.index, self.spp, k as u32);
-                sobol02(i, [(k >> 32) as u32, mix64(k) as u32])
+                let (k, s, slot) = self.next_dim();
+                let i = self.permuted(slot, Row::Points(0), k as u32);
+                sobol02(i, s)
             }
         }
     }
@@ -121,10 +187,9 @@ impl PixelSamples {
                 // the block of n consecutive points at a permuted block index, so the pixel's n·spp points are
                 // stratified as a whole (as pbrt-v3's samplers stratify arrays across the pixel), and each
                 // block of a power-of-two size is itself a (0,2)-net.
-                let k = self.dim_key();
-                let s = [(k >> 32) as u32, mix64(k) as u32];
+                let (k, s, slot) = self.next_dim();
                 let n = out.len() as u64;
-                let block = permute(self.index, self.spp, mix64(k ^ ARRAY_BLOCKS) as u32) as u64;
+                let block = self.permuted(slot, Row::Blocks(0), mix64(k ^ ARRAY_BLOCKS) as u32) as u64;
                 if n * self.spp as u64 <= u32::MAX as u64 {
                     let first = block * n;
                     out.iter_mut().enumerate().for_each(|(j, u)| *u = sobol02((first + j as u64) as u32, s));
@@ -238,6 +303,55 @@ mod tests {
             coherent_order(&mut pts, &mut OrderScratch::default());
             let bits = |v: &[[f32; 2]]| v.iter().map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
             assert_eq!(bits(&pts), bits(&expect), "n = {n}");
+        }
+    }
+
+    /// The values the stream must give, computed from their definition: dimension d (from 1) of sample
+    /// `index` has key hash3(seed, pixel, d), a point is that dimension's scrambled (0,2)-sequence at the
+    /// permuted sample index, an array the block of points at the permuted block index.
+    fn plain(seed: u64, pixel: [i32; 2], spp: u32, index: u32, d: u64, array: Option<usize>) -> Vec<[f32; 2]> {
+        let pixel_key = ((pixel[0] as u32 as u64) << 32) | pixel[1] as u32 as u64;
+        let k = hash3(seed, pixel_key, d);
+        let s = [(k >> 32) as u32, mix64(k) as u32];
+        match array {
+            None => vec![sobol02(permute(index, spp, k as u32), s)],
+            Some(n) => {
+                let block = permute(index, spp, mix64(k ^ ARRAY_BLOCKS) as u32);
+                (0..n as u32).map(|j| sobol02(block * n as u32 + j, s)).collect()
+            }
+        }
+    }
+
+    #[test]
+    fn tabulated_permutations_give_the_defined_values_in_any_call_pattern() {
+        // Samples in order and out of order, a pixel left and revisited, a dimension drawn as a point by some
+        // samples and as an array by others, more dimensions than are remembered, and sample counts with and
+        // without tables.
+        for spp in [1u32, 3, 16, 64, TABLE_SPP + 1] {
+            let mut st = PixelSamples::new(SamplerKind::Stratified, spp, 9);
+            let mut order: Vec<([i32; 2], u32)> = (0..spp).map(|i| ([2, 7], i)).collect();
+            order.extend((0..spp).rev().map(|i| ([3, 7], i)));
+            order.extend((0..spp.min(5)).map(|i| ([2, 7], (i * 7) % spp)));
+            for (pixel, i) in order {
+                st.start(pixel, i);
+                let dims = if i % 3 == 0 { KEPT_KEYS as u64 + 6 } else { 5 + (i as u64 % 4) };
+                for d in 1..=dims {
+                    let array = ((d + i as u64) % 3 == 0).then_some(1 + (d as usize % 4));
+                    let got = match array {
+                        None => vec![st.get2d()],
+                        Some(n) => {
+                            let mut v = vec![[0.0; 2]; n];
+                            st.array2d(&mut v);
+                            v
+                        }
+                    };
+                    assert_eq!(
+                        got,
+                        plain(9, pixel, spp, i, d, array),
+                        "spp {spp}, pixel {pixel:?}, sample {i}, dim {d}"
+                    );
+                }
+            }
         }
     }
 
