@@ -336,7 +336,7 @@ mod tests {
                 st.start(pixel, i);
                 let dims = if i % 3 == 0 { KEPT_KEYS as u64 + 6 } else { 5 + (i as u64 % 4) };
                 for d in 1..=dims {
-                    let array = ((d + i as u64) % 3 == 0).then_some(1 + (d as usize % 4));
+                    let array = (d + i as u64).is_multiple_of(3).then_some(1 + (d as usize % 4));
                     let got = match array {
                         None => vec![st.get2d()],
                         Some(n) => {
