@@ -131,28 +131,25 @@ impl PixelSamples {
         (key, scramble, None)
     }
 
-    /// `permute(self.index, spp, perm_key)`, from remembered dimension `slot`'s row when it holds `want`'s
-    /// permutation (`want` names the kind; its start is ignored), tabulating the row on its first use.
+    /// `permute(self.index, spp, perm_key)`, from remembered dimension `slot`'s row when it holds that
+    /// permutation (`blocks`: array blocks' order, else points'), tabulating the row on its first use.
     #[inline]
-    fn permuted(&mut self, slot: Option<usize>, want: Row, perm_key: u32) -> u32 {
+    fn permuted(&mut self, slot: Option<usize>, blocks: bool, perm_key: u32) -> u32 {
         let (spp, i) = (self.spp, self.index);
         let Some(d) = slot.filter(|_| spp <= TABLE_SPP && i < spp) else {
             return permute(i, spp, perm_key);
         };
         let n = spp as usize;
         let row = &mut self.dims[d].row;
-        let tabulated = match (*row, want) {
-            (Row::Points(from), Row::Points(_)) | (Row::Blocks(from), Row::Blocks(_)) => i >= from,
+        let tabulated = match (*row, blocks) {
+            (Row::Points(from), false) | (Row::Blocks(from), true) => i >= from,
             _ => false,
         };
         if !tabulated {
             if *row != Row::None {
                 return permute(i, spp, perm_key);
             }
-            *row = match want {
-                Row::Blocks(_) => Row::Blocks(i),
-                _ => Row::Points(i),
-            };
+            *row = if blocks { Row::Blocks(i) } else { Row::Points(i) };
             if self.rows.is_empty() {
                 self.rows = vec![0; KEPT_KEYS * n];
             }
@@ -167,7 +164,7 @@ impl PixelSamples {
             SamplerKind::Random => self.rng.uniform2(),
             SamplerKind::Stratified => {
                 let (k, s, slot) = self.next_dim();
-                let i = self.permuted(slot, Row::Points(0), k as u32);
+                let i = self.permuted(slot, false, k as u32);
                 sobol02(i, s)
             }
         }
@@ -189,7 +186,7 @@ impl PixelSamples {
                 // block of a power-of-two size is itself a (0,2)-net.
                 let (k, s, slot) = self.next_dim();
                 let n = out.len() as u64;
-                let block = self.permuted(slot, Row::Blocks(0), mix64(k ^ ARRAY_BLOCKS) as u32) as u64;
+                let block = self.permuted(slot, true, mix64(k ^ ARRAY_BLOCKS) as u32) as u64;
                 if n * self.spp as u64 <= u32::MAX as u64 {
                     let first = block * n;
                     out.iter_mut().enumerate().for_each(|(j, u)| *u = sobol02((first + j as u64) as u32, s));

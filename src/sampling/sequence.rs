@@ -78,9 +78,10 @@ pub fn permute(i: u32, len: u32, key: u32) -> u32 {
     permute_finish(i, len, key)
 }
 
-/// `out[j] = permute(first + j, len, key)` for indices first + j < len: the same values, eight at a time with AVX2 where the CPU has it
-/// (a pixel's whole row of sample orders, which [`super::pixel_samples::PixelSamples`] tabulates; one at a
-/// time the hash's multiplies were the draws' largest cost).
+/// `out[j] = permute(first + j, len, key)` for indices first + j < len: the same values, eight at a time
+/// with AVX2 where the CPU has it (a pixel's whole row of sample orders, which
+/// [`super::pixel_samples::PixelSamples`] tabulates; one at a time the hash's multiplies were the draws'
+/// largest cost).
 pub fn permute_range(first: u32, out: &mut [u32], len: u32, key: u32) {
     #[cfg(target_arch = "x86_64")]
     if len > 1 && std::arch::is_x86_feature_detected!("avx2") {
