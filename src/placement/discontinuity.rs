@@ -356,25 +356,11 @@ pub(crate) fn discontinuity_map(
 /// when the map runs out, the rest are uniform among free usable pixels. Returns the pixels and a note when
 /// fewer could be placed.
 fn draw(g: &GBuffer, map: &[f32], taken: &mut [bool], budget: usize, seed: u64) -> (Vec<PixelId>, Vec<String>) {
-    draw_tagged(g, map, taken, budget, seed, [STAGE_DRAW, STAGE_FALLBACK])
-}
-
-/// [`draw`] with the stream tags of the draws and of the uniform fallback given (`[draw, fallback]`), so a
-/// strategy that draws from maps in several rounds keeps each round's streams apart.
-pub(super) fn draw_tagged(
-    g: &GBuffer,
-    map: &[f32],
-    taken: &mut [bool],
-    budget: usize,
-    seed: u64,
-    tags: [u64; 2],
-) -> (Vec<PixelId>, Vec<String>) {
-    let [draw_tag, fallback_tag] = tags;
     let mut table = Discrete2D::new(g.width, g.height, map);
     let mut out = Vec::with_capacity(budget);
     let mut notes = Vec::new();
     for i in 0..budget {
-        let mut rng = Rng::keyed(seed, draw_tag, i as u64);
+        let mut rng = Rng::keyed(seed, STAGE_DRAW, i as u64);
         let Some((x, y)) = table.sample(rng.uniform(), rng.uniform()) else { break };
         table.remove(x, y);
         let id = g.id(x, y);
@@ -383,7 +369,7 @@ pub(super) fn draw_tagged(
     }
     if out.len() < budget {
         let mut free = free_usable(g, taken);
-        let rest = pick_uniform(&mut free, budget - out.len(), seed, fallback_tag);
+        let rest = pick_uniform(&mut free, budget - out.len(), seed, STAGE_FALLBACK);
         if out.is_empty() {
             notes.push("the discontinuity map is zero everywhere: new caches are uniformly random".to_string());
         }

@@ -41,6 +41,7 @@ mod hierarchy;
 mod points;
 mod search;
 mod split;
+mod stratified;
 #[cfg(test)]
 mod test_scenes;
 

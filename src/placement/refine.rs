@@ -6,15 +6,18 @@
 //! the rounds before it, so refinement follows the error that remains rather than the error one map
 //! predicted, and no pixel is left far from a cache it can use (the gaps that made the clustered
 //! placements lose to IM, experiments/notes/stability.md). Given a target error instead of a count, the
-//! rounds go on until refine's own estimate ([`super::estimate`]) says it is met.
+//! rounds go on until refine's own estimate ([`super::estimate`]) says it is met. A round's caches are
+//! drawn from its map *stratified* by the map's mass ([`super::stratified`]), not independently as DGS
+//! draws: one cache per equal share of the mass, so a flat stretch of the map gets evenly spread caches
+//! rather than clumps and holes.
 //!
-//! Depends on `gbuffer`, `cache` (the §5 selection), the DGS terms and draws of [`super::discontinuity`],
+//! Depends on `gbuffer`, `cache` (the §5 selection), the DGS terms of [`super::discontinuity`],
 //! the estimate and `sampling`; sees cache records only through [`CacheOracle::diff_many`] and
 //! [`CacheOracle::predict_many`]. Never depends on `render`, `scene` or an application.
 
 use rayon::prelude::*;
 
-use super::discontinuity::{cache_points, diff_and_gap_terms, draw_tagged, geometry_term};
+use super::discontinuity::{cache_points, diff_and_gap_terms, geometry_term};
 use super::estimate;
 use super::points::usable_normal;
 use super::{
@@ -24,9 +27,8 @@ use crate::cache::CacheIndex;
 use crate::error::Result;
 use crate::gbuffer::GBuffer;
 
-/// Stream tags of refine's random decisions; the round number is added to each.
+/// Stream tag of refine's draws; the round number is added to it.
 const STAGE_DRAW: u64 = 0x5246_0100;
-const STAGE_FALLBACK: u64 = 0x5246_0200;
 
 /// Refine's second stage: rounds of map-guided insertion.
 ///
@@ -47,7 +49,9 @@ const STAGE_FALLBACK: u64 = 0x5246_0200;
 /// carvings) gets near-uniform rounds, one whose disagreement sits on a few edges (the staircase's steps)
 /// gets concentrated ones (the cube sharpens that further). Diff_max is left out: it peaks on single noisy
 /// pairs. The weights were chosen on the cache-AO cells of the stability map at 160×90 and 320×180,
-/// experiments/notes/refine.md and experiments/results/refine-tuning/.
+/// experiments/notes/refine.md and experiments/results/refine-tuning/. A round's caches are one per equal
+/// share of its map's mass ([`super::stratified::draw`]; independent draws were 1.04× the RMSE over the
+/// stability map's cache-AO cells at 320×180, experiments/notes/refine.md).
 ///
 /// With `PlacementParams::target` (`targeterror`) the budget is a ceiling: the first stage is 1/256 of it
 /// (the registry's `first_stage_budget`), and rounds of the same maps add caches until
@@ -102,9 +106,11 @@ impl Rounds<'_> {
     /// Round `r`: draws `n` caches from a fresh map and evaluates them; returns how many it added.
     fn round(&mut self, oracle: &mut dyn CacheOracle, r: usize, n: usize) -> usize {
         let map = round_map(self.g, oracle, self.params, &self.taken, &self.fixed);
-        let tags = [STAGE_DRAW + r as u64, STAGE_FALLBACK + r as u64];
-        let (sites, notes) = draw_tagged(self.g, &map, &mut self.taken, n, self.seed, tags);
-        self.info.notes.extend(notes);
+        let sites = super::stratified::draw(self.g.width, self.g.height, &map, n, self.seed, STAGE_DRAW + r as u64);
+        sites.iter().for_each(|&id| self.taken[id as usize] = true);
+        if sites.len() < n {
+            self.info.notes.push(format!("only {} free usable pixels remain for a round of {n} caches", sites.len()));
+        }
         if !sites.is_empty() {
             self.info.added += sites.len();
             self.info.rounds += 1;
