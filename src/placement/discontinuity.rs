@@ -63,8 +63,8 @@ struct Band {
     ids: Vec<u32>,
     off: Vec<u32>,
     pairs: Vec<u64>,
-    /// With `sites` given: per pixel of the band, the image-space distance to the nearest cache it selects
-    /// (infinite when it selects none or is unusable).
+    /// With `sites` given: per pixel of the band, the world distance to the nearest cache it selects over the
+    /// pixel's own distance from the camera (infinite when it selects none or is unusable).
     gap: Vec<f32>,
 }
 
@@ -94,35 +94,37 @@ fn gather_band(
     let mut gap = if sites.is_some() { vec![f32::INFINITY; g.width * nrows] } else { Vec::new() };
     let mut queries = Vec::with_capacity(TILE * TILE);
     let mut where_ = Vec::with_capacity(TILE * TILE);
+    let mut depths = Vec::with_capacity(TILE * TILE);
     let mut scratch = GroupScratch::default();
     for tx in (0..g.width).step_by(TILE) {
         for ty in (0..nrows).step_by(TILE) {
             queries.clear();
+            depths.clear();
             where_.clear();
             for y in ty..(ty + TILE).min(nrows) {
                 for x in tx..(tx + TILE).min(g.width) {
                     if stride > 1 && !looked_up(x, y) {
                         continue;
                     }
-                    if let Some(q) = g.get(g.id(x, y0 + y)).and_then(|sp| usable_normal(sp).map(|n| (sp.p, n))) {
-                        queries.push(q);
-                        where_.push(y * g.width + x);
+                    if let Some(sp) = g.get(g.id(x, y0 + y)) {
+                        if let Some(n) = usable_normal(sp) {
+                            queries.push((sp.p, n));
+                            depths.push(sp.depth);
+                            where_.push(y * g.width + x);
+                        }
                     }
                 }
             }
             index.select_group_in(&queries, &mut scratch, |i, near| {
                 let at = where_[i];
                 if let Some(sites) = sites {
-                    let (x, y) = ((at % g.width) as f32, (y0 + at / g.width) as f32);
+                    let (p, depth) = (queries[i].0, depths[i]);
                     gap[at] = near
                         .iter()
-                        .filter_map(|nb| sites.get(nb.id as usize))
-                        .map(|&s| {
-                            let (sx, sy) = ((s as usize % g.width) as f32, (s as usize / g.width) as f32);
-                            (sx - x).powi(2) + (sy - y).powi(2)
-                        })
+                        .filter_map(|nb| sites.get(nb.id as usize).and_then(|&s| g.get(s)))
+                        .map(|c| (c.p - p).length())
                         .fold(f32::INFINITY, f32::min)
-                        .sqrt();
+                        / depth.max(f32::MIN_POSITIVE);
                 }
                 let slot = &mut sel[at * k..(at + 1) * k];
                 for (s, nb) in slot.iter_mut().zip(near) {
@@ -207,9 +209,12 @@ fn diff_terms(g: &GBuffer, index: &CacheIndex, oracle: &dyn CacheOracle) -> (Vec
     (avg, max)
 }
 
-/// [`diff_terms`] and, when `want_gap`, each pixel's image-space distance to the nearest cache its §5
-/// selection keeps (infinite where it keeps none; empty when not wanted) — from the same selections, made on
-/// a grid of every `stride`-th pixel in x and y (1 or 2; see `gather_band`).
+/// [`diff_terms`] and, when `want_gap`, each pixel's gap: the world distance to the nearest cache its §5
+/// selection keeps over the pixel's distance from the camera (infinite where it keeps none; empty when not
+/// wanted) — from the same selections, made on a grid of every `stride`-th pixel in x and y (1 or 2; see
+/// `gather_band`). Measured so, a gap on a surface seen at a grazing angle counts for more than the same
+/// gap in pixels on one that faces the camera: its pixels are farther apart on the surface, and the
+/// values the caches interpolate vary over the surface, not the image.
 pub(super) fn diff_and_gap_terms(
     g: &GBuffer,
     index: &CacheIndex,

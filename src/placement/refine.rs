@@ -42,8 +42,8 @@ const STAGE_DRAW: u64 = 0x5246_0100;
 /// A round's map, on every usable pixel without a cache, is
 /// `D³ / mean(D³) + G / mean(G) + 2 · min((gap / h)², 16)` plus the floor, with D = Diff_avg / mean(Diff_avg),
 /// where Diff_avg is DGS's mean difference of the caches the pixel's §5 selection blends (ALGORITHMS.md §4.5.3), G is Eq. 3,
-/// gap is the image-space distance to the nearest cache that selection keeps (a pixel that keeps none counts
-/// 16) and h = sqrt(usable pixels / caches) is the mean cache spacing; the selections behind Diff_avg and gap
+/// gap is the world distance to the nearest cache that selection keeps over the pixel's distance from the
+/// camera (a pixel that keeps none counts 16) and h is the root mean square of the gaps; the selections behind Diff_avg and gap
 /// are made on every second pixel in x and y, the others taking their grid pixel's. Unlike DGS's min–max normalisation,
 /// dividing by the mean keeps each term's contrast: a scene whose caches disagree everywhere (sibenik's
 /// carvings) gets near-uniform rounds, one whose disagreement sits on a few edges (the staircase's steps)
@@ -51,7 +51,12 @@ const STAGE_DRAW: u64 = 0x5246_0100;
 /// pairs. The weights were chosen on the cache-AO cells of the stability map at 160×90 and 320×180,
 /// experiments/notes/refine.md and experiments/results/refine-tuning/. A round's caches are one per equal
 /// share of its map's mass ([`super::stratified::draw`]; independent draws were 1.04× the RMSE over the
-/// stability map's cache-AO cells at 320×180, experiments/notes/refine.md).
+/// stability map's cache-AO cells at 320×180, experiments/notes/refine.md). The gap is measured on the
+/// surface rather than in the image (pixels apart) because irradiance caching lost to the clustered
+/// placements on the Cornell box, whose walls are seen at grazing angles: measured so, refine no longer
+/// loses in any irradiance cell of the map at 160×90 (experiments/notes/refine.md); dividing by the
+/// camera distance keeps far surfaces from drawing more caches than near ones (the world distance alone
+/// lost on sibenik, whose nave is deep).
 ///
 /// With `PlacementParams::target` (`targeterror`) the budget is a ceiling: the first stage is 1/256 of it
 /// (the registry's `first_stage_budget`), and rounds of the same maps add caches until
@@ -217,8 +222,13 @@ fn round_map(
             relative(&mut avg, mask);
             d.par_iter_mut().zip(&avg).for_each(|(d, a)| *d += a);
         }
-        let usable = mask.iter().filter(|m| **m).count();
-        let spacing = (usable as f32 / oracle.len() as f32).sqrt().max(1.0);
+        // The gaps over their root mean square (the finite ones: a pixel that keeps no cache counts the cap).
+        let (sum, count) = gap
+            .iter()
+            .zip(mask)
+            .filter(|(x, m)| **m && x.is_finite())
+            .fold((0f64, 0usize), |(s, n), (&x, _)| (s + (x as f64).powi(2), n + 1));
+        let spacing = if count > 0 { ((sum / count as f64).sqrt() as f32).max(f32::MIN_POSITIVE) } else { 1.0 };
         d.par_iter_mut().zip(&gap).for_each(|(d, &gp)| *d += GAP_WEIGHT * ((gp / spacing).powi(2)).min(GAP_CAP));
     }
     if let Some(geo) = &fixed.geometry {
