@@ -68,9 +68,9 @@ fn cache_ao_renders_match_the_recorded_checksums() {
         ("vgc+dgs:diff", &[], 0xd991_4460_893a_04d5),
         ("vgc+dgs:geom", &[], 0x405a_b6f3_b604_1e1d),
         // Recorded when refine was added (issue 43), so later refactors keep it bit for bit too; re-recorded
-        // when its rounds began to draw stratified by the map's mass and to measure the gap on the surface
-        // (experiments/notes/refine.md).
-        ("refine", &[], 0x3030_03e5_5472_d724),
+        // when its rounds began to draw stratified by the map's mass, to measure the gap on the surface and
+        // to be three (experiments/notes/refine.md).
+        ("refine", &[], 0xb120_c582_301e_5f0e),
         (
             "vgc+dgs",
             &[("gather", "8"), ("angular", "spherical"), ("M", "3"), ("N", "9"), ("maxdistance", "0.7")],

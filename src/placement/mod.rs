@@ -276,7 +276,7 @@ impl Default for PlacementParams {
             dgs: DgsTerms { diff: true, geometry: true },
             dgs_window: 5,
             refine_share: 0.8,
-            refine_rounds: 4,
+            refine_rounds: 3,
             refine_floor: 0.1,
             target: None,
         }

@@ -35,7 +35,7 @@ const STAGE_DRAW: u64 = 0x5246_0100;
 /// | option | type | default | meaning |
 /// |---|---|---|---|
 /// | `PlacementParams::refine_share` | f32 | 0.8 | the share of the budget the rounds add (the driver gives IM the rest) |
-/// | `PlacementParams::refine_rounds` | u32 | 4 | rounds; the share is split evenly over them |
+/// | `PlacementParams::refine_rounds` | u32 | 3 | rounds; the share is split evenly over them |
 /// | `PlacementParams::refine_floor` | f32 | 0.1 | uniform floor, as a fraction of the map's mean over free usable pixels |
 /// | `PlacementParams::dgs` | DgsTerms | both | whether the map has the difference and the geometry terms (importance caching omits G, as for DGS) |
 ///
@@ -56,7 +56,9 @@ const STAGE_DRAW: u64 = 0x5246_0100;
 /// placements on the Cornell box, whose walls are seen at grazing angles: measured so, refine no longer
 /// loses in any irradiance cell of the map at 160×90 (experiments/notes/refine.md); dividing by the
 /// camera distance keeps far surfaces from drawing more caches than near ones (the world distance alone
-/// lost on sibenik, whose nave is deep).
+/// lost on sibenik, whose nave is deep). Three rounds: with stratified draws two, three and four were within
+/// the seeds' spread of each other in RMSE, and four cost up to 1.3× VGC+DGS's placement time where the
+/// records are cheap (importance caching), three at most 1.1× (experiments/notes/refine.md).
 ///
 /// With `PlacementParams::target` (`targeterror`) the budget is a ceiling: the first stage is 1/256 of it
 /// (the registry's `first_stage_budget`), and rounds of the same maps add caches until

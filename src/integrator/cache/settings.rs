@@ -37,7 +37,7 @@ pub const REFINE_SHARE: ParamDef<f64> =
         .valid(Valid::Below { lo: 0.0, below: 1.0 });
 /// `refinerounds`: refine's rounds.
 pub const REFINE_ROUNDS: ParamDef<i64> =
-    ParamDef::int("refinerounds", 4, "refine: rounds of insertion, each from a fresh map").between(1, 64);
+    ParamDef::int("refinerounds", 3, "refine: rounds of insertion, each from a fresh map").between(1, 64);
 /// `refinefloor`: refine's uniform floor.
 pub const REFINE_FLOOR: ParamDef<f64> = ParamDef::float(
     "refinefloor",
