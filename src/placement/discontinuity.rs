@@ -106,12 +106,10 @@ fn gather_band(
                     if stride > 1 && !looked_up(x, y) {
                         continue;
                     }
-                    if let Some(sp) = g.get(g.id(x, y0 + y)) {
-                        if let Some(n) = usable_normal(sp) {
-                            queries.push((sp.p, n));
-                            depths.push(sp.depth);
-                            where_.push(y * g.width + x);
-                        }
+                    if let Some((sp, n)) = g.get(g.id(x, y0 + y)).and_then(|sp| usable_normal(sp).map(|n| (sp, n))) {
+                        queries.push((sp.p, n));
+                        depths.push(sp.depth);
+                        where_.push(y * g.width + x);
                     }
                 }
             }
