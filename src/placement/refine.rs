@@ -2,7 +2,8 @@
 //! uniform first stage (IM with `1 − refine_share` of the budget), the rest is added in rounds, each drawn
 //! from a fresh map of the caches placed so far: where the caches a pixel would blend disagree
 //! (Diff_avg), where the normals change (G), and where the nearest cache the pixel's §5 selection keeps is
-//! far away in the image (the coverage term), over a small uniform floor. Every round sees the caches of
+//! far away on the surface, for the pixel's distance from the camera (the coverage term), over a small
+//! uniform floor. Every round sees the caches of
 //! the rounds before it, so refinement follows the error that remains rather than the error one map
 //! predicted, and no pixel is left far from a cache it can use (the gaps that made the clustered
 //! placements lose to IM, experiments/notes/stability.md). Given a target error instead of a count, the
