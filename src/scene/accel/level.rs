@@ -1,26 +1,21 @@
 //! STAGE 2 (scene): one level of the two-level acceleration structure — a CWBVH built by obvhs over
-//! triangles, analytic shapes, curve segments or instances, with the primitives stored in leaf order — and
-//! the build settings. The queries that walk it are in the parent module.
-
-use std::time::Duration;
+//! triangles, analytic shapes, curve segments or instances, with the primitives stored in leaf order (a large
+//! triangle split across several leaves appears in each) — and the build settings. The queries that walk
+//! it are in the parent module.
 
 use glam::Vec3A;
+use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
+use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::cwbvh::CwBvh;
-use obvhs::cwbvh::builder::build_cwbvh;
-use obvhs::{Boundable, BvhBuildParams};
+use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
+use obvhs::ploc::PlocBuilder;
+use obvhs::splits::split_aabbs_preset;
+use obvhs::triangle::Triangle;
 
 use super::{BuildPrim, Item, PrimRef, check_extent};
 use crate::scene::shapes::curve::{Curve, CurveSegment};
 use crate::scene::shapes::quadric::Quadric;
-
-struct Boxed(Aabb);
-
-impl Boundable for Boxed {
-    fn aabb(&self) -> Aabb {
-        self.0
-    }
-}
 
 /// One BVH level: the tree plus its primitives in leaf order.
 #[derive(Default)]
@@ -29,6 +24,9 @@ pub struct Level {
     pub(super) items: Vec<Item>,
     /// World (or object) space bounds of everything in the level.
     pub bounds: Option<(Vec3A, Vec3A)>,
+    /// Whether the tree is shallow enough for the distance-ordered nearest-hit search
+    /// ([`NearStack::MAX_DEPTH`](super::traverse::NearStack::MAX_DEPTH)).
+    pub(super) ordered: bool,
 }
 
 impl std::fmt::Debug for Level {
@@ -71,14 +69,28 @@ impl Level {
         if kept.is_empty() {
             return Level::default();
         }
-        let aabbs: Vec<Boxed> = kept.iter().map(|(_, (lo, hi))| Boxed(Aabb::new(*lo, *hi))).collect();
+        let params = build_params(kept.len());
+        let mut aabbs: Vec<Aabb> = kept.iter().map(|(_, (lo, hi))| Aabb::new(*lo, *hi)).collect();
+        let mut indices: Vec<u32> = (0..kept.len() as u32).collect();
+        if params.pre_split {
+            split_triangles(prims, &kept, &mut aabbs, &mut indices);
+        }
         let bounds = kept
             .iter()
             .fold((Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)), |(lo, hi), (_, (a, b))| {
                 (lo.min(*a), hi.max(*b))
             });
-        let bvh = build_cwbvh(&aabbs, build_params(aabbs.len()), &mut Duration::default());
-        let items = bvh
+        let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
+            params.ploc_search_distance,
+            &aabbs,
+            indices,
+            params.sort_precision,
+            params.search_depth_threshold,
+        );
+        bvh2.uses_spatial_splits = params.pre_split;
+        ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+        let bvh = bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
+        let items: Vec<Item> = bvh
             .primitive_indices
             .iter()
             .map(|&k| {
@@ -86,7 +98,10 @@ impl Level {
                 Item { verts: p.verts, r: p.r }
             })
             .collect();
-        Level { bvh: Some(bvh), items, bounds: Some(bounds) }
+        let ordered = bvh.nodes.len() >= ORDERED_MIN_NODES
+            && items.len() <= MAX_ORDERED_SLOTS
+            && super::traverse::depth(&bvh) <= super::traverse::NearStack::MAX_DEPTH;
+        Level { bvh: Some(bvh), items, bounds: Some(bounds), ordered }
     }
 
     /// Number of primitives in this level.
@@ -98,6 +113,72 @@ impl Level {
     pub fn is_empty(&self) -> bool {
         self.items.is_empty()
     }
+}
+
+/// Levels with fewer nodes keep obvhs's traversal for the nearest hit: on the Cornell box (3 nodes) the
+/// distance-ordered search's bookkeeping cost more than it saved (`path` 1.29 s against 1.27–1.28 s).
+const ORDERED_MIN_NODES: usize = 16;
+
+/// The most leaf entries the distance-ordered search can address (it packs a leaf's first slot in 28 bits).
+pub(super) const MAX_ORDERED_SLOTS: usize = 1 << 28;
+
+/// Splits the boxes of large triangles among `kept` into several tighter ones (obvhs's preset, as its own
+/// triangle builder does: a triangle spanning a room otherwise puts one box around empty space that every
+/// ray through the room must enter). A split triangle's first box replaces its own and the others are
+/// appended with its index; the first `kept.len()` entries of `indices` stay 0, 1, 2, … as obvhs's leaves
+/// need (a leaf's primitive is looked up in the index list at the position its own index names). A
+/// triangle then sits in several leaves; a query meeting it twice gets the same hit twice.
+fn split_triangles(
+    prims: &[BuildPrim],
+    kept: &[(usize, (Vec3A, Vec3A))],
+    aabbs: &mut Vec<Aabb>,
+    indices: &mut Vec<u32>,
+) {
+    let tri_slots: Vec<u32> =
+        (0..kept.len() as u32).filter(|&k| matches!(prims[kept[k as usize].0].r, PrimRef::Triangle { .. })).collect();
+    if tri_slots.is_empty() {
+        return;
+    }
+    // Indexed by slot in `kept` (only the triangles' entries are read).
+    let tris: Vec<Triangle> = kept
+        .iter()
+        .map(|(i, _)| {
+            let [v0, v1, v2] = prims[*i].verts.map(Vec3A::from);
+            Triangle { v0, v1, v2 }
+        })
+        .collect();
+    let mut boxes: Vec<Aabb> = tri_slots.iter().map(|&k| aabbs[k as usize]).collect();
+    let mut idx = tri_slots.clone();
+    let largest = boxes.iter().map(Aabb::half_area).fold(0.0f32, f32::max);
+    let avg = boxes.iter().map(Aabb::half_area).sum::<f32>() / boxes.len() as f32;
+    split_aabbs_preset(&mut boxes, &mut idx, &tris, avg, largest);
+    if boxes.len() == tri_slots.len() {
+        return;
+    }
+    // The pieces' corners are computed in floating point (the edge's crossing of the split plane), so a
+    // piece may fall short of its part of the triangle by a rounding error: pad every piece of a split
+    // triangle so no hit on the triangle lies outside all of its boxes.
+    let mut pieces = vec![0u32; kept.len()];
+    for &k in &idx {
+        pieces[k as usize] += 1;
+    }
+    for (b, &k) in boxes.iter_mut().zip(&idx) {
+        if pieces[k as usize] > 1 {
+            *b = padded(*b);
+        }
+    }
+    for (j, &k) in tri_slots.iter().enumerate() {
+        aabbs[k as usize] = boxes[j];
+    }
+    aabbs.extend_from_slice(&boxes[tri_slots.len()..]);
+    indices.extend_from_slice(&idx[tri_slots.len()..]);
+}
+
+/// `b` grown on every side by 2⁻²⁰ of its largest coordinate's magnitude (many ulps; the smallest normal
+/// float where that is zero).
+fn padded(b: Aabb) -> Aabb {
+    let pad = (b.min.abs().max(b.max.abs()).max_element() * (1.0 / (1u32 << 20) as f32)).max(f32::MIN_POSITIVE);
+    Aabb::new(b.min - Vec3A::splat(pad), b.max + Vec3A::splat(pad))
 }
 
 /// Levels with at most this many primitives get obvhs's most thorough build.

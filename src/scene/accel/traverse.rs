@@ -81,7 +81,7 @@ impl Traversal {
             | (if d.y.is_sign_negative() { 0 } else { 0x0202_0202 })
             | (if d.z.is_sign_negative() { 0 } else { 0x0101_0101 });
         Traversal {
-            stack: Stack { data: [MaybeUninit::uninit(); STACK_SIZE], index: 0 },
+            stack: Stack { data: [const { MaybeUninit::uninit() }; STACK_SIZE], index: 0 },
             current_group: if bvh.nodes.is_empty() { UVec2::ZERO } else { uvec2(0, 0x8000_0000) },
             primitive_group: UVec2::ZERO,
             oct_inv4,
@@ -89,6 +89,93 @@ impl Traversal {
             hitmask: 0,
         }
     }
+}
+
+/// Capacity of [`NearStack`]. A node visit pushes at most 8 children and pops one, so a tree of depth d never
+/// holds more than 7·d + 1 entries; levels deeper than [`NearStack::MAX_DEPTH`] use obvhs's traversal.
+const NEAR_STACK: usize = 256;
+
+/// The nodes the nearest-hit search has still to visit, each with the distance at which the ray enters its
+/// box, the nearest on top.
+pub(super) struct NearStack {
+    data: [MaybeUninit<(u32, f32)>; NEAR_STACK],
+    len: usize,
+}
+
+impl NearStack {
+    /// The deepest tree (in node levels) whose search fits the stack.
+    pub const MAX_DEPTH: usize = (NEAR_STACK - 1) / 7;
+
+    /// An empty stack.
+    #[inline(always)]
+    pub fn new() -> Self {
+        NearStack { data: [const { MaybeUninit::uninit() }; NEAR_STACK], len: 0 }
+    }
+
+    /// Pushes node `node` entered at distance `t`.
+    #[inline(always)]
+    pub fn push(&mut self, node: u32, t: f32) {
+        // Indexing checks the bound: unreachable for trees within MAX_DEPTH.
+        self.data[self.len] = MaybeUninit::new((node, t));
+        self.len += 1;
+    }
+
+    /// The number of entries.
+    #[inline(always)]
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Orders the entries from `from` on by decreasing distance, so the nearest of them is popped first
+    /// (insertion sort: at most 8 entries).
+    #[inline(always)]
+    pub fn sort_from(&mut self, from: usize) {
+        for i in from + 1..self.len {
+            // SAFETY: entries below `len` were written by `push`.
+            let x = unsafe { self.data[i].assume_init() };
+            let mut j = i;
+            while j > from && unsafe { self.data[j - 1].assume_init().1 } < x.1 {
+                self.data[j] = self.data[j - 1];
+                j -= 1;
+            }
+            self.data[j] = MaybeUninit::new(x);
+        }
+    }
+
+    /// Pops the top entry.
+    #[inline(always)]
+    pub fn pop(&mut self) -> Option<(u32, f32)> {
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        // SAFETY: entries below the pre-pop `len` were written by `push`.
+        Some(unsafe { self.data[self.len].assume_init() })
+    }
+}
+
+/// The depth of `bvh` in node levels (1 for a root alone, 0 for an empty tree).
+pub(super) fn depth(bvh: &CwBvh) -> usize {
+    if bvh.nodes.is_empty() {
+        return 0;
+    }
+    let mut deepest = 0;
+    let mut todo = vec![(0u32, 1usize)];
+    while let Some((i, d)) = todo.pop() {
+        deepest = deepest.max(d);
+        let n = &bvh.nodes[i as usize];
+        for k in 0..n.imask.count_ones() {
+            todo.push((n.child_base_idx + k, d + 1));
+        }
+    }
+    deepest
+}
+
+/// The far limit the node test uses for a search limited to `t_max` (the rounding margin of
+/// pbrt-v3's `Bounds3::IntersectP`).
+#[inline(always)]
+pub(super) fn far_limit(t_max: f32) -> f32 {
+    t_max * (1.0 + 2.0 * gamma(3))
 }
 
 /// Per-ray constants of the node test.
@@ -147,13 +234,20 @@ fn setup<'a>(node: &'a CwBvhNode, r: &TravRay) -> ([&'a [u8; 8]; 6], Vec3A, Vec3
     let [x0, x1] = pick(&node.child_min_x, &node.child_max_x, r.neg[0]);
     let [y0, y1] = pick(&node.child_min_y, &node.child_max_y, r.neg[1]);
     let [z0, z1] = pick(&node.child_min_z, &node.child_max_z, r.neg[2]);
-    ([x0, x1, y0, y1, z0, z1], adj_inv, adj_o, r.t_max * (1.0 + 2.0 * gamma(3)))
+    ([x0, x1, y0, y1, z0, z1], adj_inv, adj_o, far_limit(r.t_max))
 }
 
-/// Bit c set when child c's quantised box overlaps the ray segment [0, t_max·(1 + 2γ₃)] (4 at a time).
+/// The entry and exit distances of children 4·half … 4·half + 3 (SSE2 lanes): the slab test's clipped
+/// [t_min, t_max] per child, empty where t_min > t_max.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn child_mask(node: &CwBvhNode, r: &TravRay) -> u32 {
+fn half_slabs(
+    q: &[&[u8; 8]; 6],
+    inv: Vec3A,
+    org: Vec3A,
+    t_far: f32,
+    half: usize,
+) -> (std::arch::x86_64::__m128, std::arch::x86_64::__m128) {
     use std::arch::x86_64::*;
     #[inline(always)]
     fn load(v: &[u8; 8], half: usize) -> __m128 {
@@ -164,25 +258,65 @@ fn child_mask(node: &CwBvhNode, r: &TravRay) -> u32 {
             _mm_cvtepi32_ps(_mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(w as i32), z), z))
         }
     }
-    let (q, inv, org, t_far) = setup(node, r);
-    let mut mask = 0u32;
     // SAFETY: SSE2 arithmetic only.
     unsafe {
         let (ix, iy, iz) = (_mm_set1_ps(inv.x), _mm_set1_ps(inv.y), _mm_set1_ps(inv.z));
         let (ox, oy, oz) = (_mm_set1_ps(org.x), _mm_set1_ps(org.y), _mm_set1_ps(org.z));
-        for half in 0..2 {
-            let t0x = _mm_add_ps(_mm_mul_ps(load(q[0], half), ix), ox);
-            let t1x = _mm_add_ps(_mm_mul_ps(load(q[1], half), ix), ox);
-            let t0y = _mm_add_ps(_mm_mul_ps(load(q[2], half), iy), oy);
-            let t1y = _mm_add_ps(_mm_mul_ps(load(q[3], half), iy), oy);
-            let t0z = _mm_add_ps(_mm_mul_ps(load(q[4], half), iz), oz);
-            let t1z = _mm_add_ps(_mm_mul_ps(load(q[5], half), iz), oz);
-            let tmin = _mm_max_ps(_mm_max_ps(t0x, t0y), _mm_max_ps(t0z, _mm_setzero_ps()));
-            let tmax = _mm_min_ps(_mm_min_ps(t1x, t1y), _mm_min_ps(t1z, _mm_set1_ps(t_far)));
+        let t0x = _mm_add_ps(_mm_mul_ps(load(q[0], half), ix), ox);
+        let t1x = _mm_add_ps(_mm_mul_ps(load(q[1], half), ix), ox);
+        let t0y = _mm_add_ps(_mm_mul_ps(load(q[2], half), iy), oy);
+        let t1y = _mm_add_ps(_mm_mul_ps(load(q[3], half), iy), oy);
+        let t0z = _mm_add_ps(_mm_mul_ps(load(q[4], half), iz), oz);
+        let t1z = _mm_add_ps(_mm_mul_ps(load(q[5], half), iz), oz);
+        let tmin = _mm_max_ps(_mm_max_ps(t0x, t0y), _mm_max_ps(t0z, _mm_setzero_ps()));
+        let tmax = _mm_min_ps(_mm_min_ps(t1x, t1y), _mm_min_ps(t1z, _mm_set1_ps(t_far)));
+        (tmin, tmax)
+    }
+}
+
+/// Bit c set when child c's quantised box overlaps the ray segment [0, t_max·(1 + 2γ₃)] (4 at a time).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn child_mask(node: &CwBvhNode, r: &TravRay) -> u32 {
+    child_entries_sse(node, r).1
+}
+
+/// [`child_entries`] four children at a time (SSE2).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn child_entries_sse(node: &CwBvhNode, r: &TravRay) -> ([f32; 8], u32) {
+    use std::arch::x86_64::*;
+    let (q, inv, org, t_far) = setup(node, r);
+    let mut mask = 0u32;
+    let mut entry = [0.0f32; 8];
+    for half in 0..2 {
+        let (tmin, tmax) = half_slabs(&q, inv, org, t_far, half);
+        // SAFETY: SSE2 only; the store writes 4 of `entry`'s 8 floats.
+        unsafe {
             mask |= (_mm_movemask_ps(_mm_cmple_ps(tmin, tmax)) as u32) << (4 * half);
+            _mm_storeu_ps(entry.as_mut_ptr().add(4 * half), tmin);
         }
     }
-    mask
+    (entry, mask)
+}
+
+/// Each child's entry distance (its box's clipped t_min) and the mask of the children whose boxes overlap
+/// [0, t_max·(1 + 2γ₃)] (bit c for child slot c). The distances order the nearest-hit search; an entry is
+/// meaningful only where its bit is set. `WIDE` as for [`intersect_node`].
+#[inline(always)]
+pub(super) fn child_entries<const WIDE: bool>(node: &CwBvhNode, r: &TravRay) -> ([f32; 8], u32) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if WIDE {
+            // SAFETY: WIDE is true only on paths entered after `has_avx2()` returned true.
+            return unsafe { child_entries_avx2(node, r) };
+        }
+        child_entries_sse(node, r)
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        child_entries_portable(node, r)
+    }
 }
 
 /// [`child_mask`] for all 8 children at once. The same operations in the same order (multiply, then add;
@@ -196,13 +330,13 @@ unsafe fn child_mask_avx2(node: &CwBvhNode, r: &TravRay) -> u32 {
     _mm256_movemask_ps(unsafe { child_hits_avx2(node, r) }) as u32
 }
 
-/// The 8-wide slab test, the same operations in the same order as [`child_mask`]'s (multiply, then add; no
+/// The 8-wide slab test, the same operations in the same order as [`half_slabs`]'s (multiply, then add; no
 /// fused multiply-add), so it visits exactly the nodes the SSE2 version visits and images do not depend on
-/// the CPU: all ones in lane c when child c is hit.
+/// the CPU: each child's clipped [t_min, t_max].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn child_hits_avx2(node: &CwBvhNode, r: &TravRay) -> std::arch::x86_64::__m256 {
+unsafe fn slabs_avx2(node: &CwBvhNode, r: &TravRay) -> (std::arch::x86_64::__m256, std::arch::x86_64::__m256) {
     use std::arch::x86_64::*;
     #[inline(always)]
     fn load(v: &[u8; 8]) -> __m256 {
@@ -220,7 +354,34 @@ unsafe fn child_hits_avx2(node: &CwBvhNode, r: &TravRay) -> std::arch::x86_64::_
     let t1z = _mm256_add_ps(_mm256_mul_ps(load(q[5]), iz), oz);
     let tmin = _mm256_max_ps(_mm256_max_ps(t0x, t0y), _mm256_max_ps(t0z, _mm256_setzero_ps()));
     let tmax = _mm256_min_ps(_mm256_min_ps(t1x, t1y), _mm256_min_ps(t1z, _mm256_set1_ps(t_far)));
+    (tmin, tmax)
+}
+
+/// All ones in lane c when child c is hit ([`slabs_avx2`]'s t_min ≤ t_max).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn child_hits_avx2(node: &CwBvhNode, r: &TravRay) -> std::arch::x86_64::__m256 {
+    use std::arch::x86_64::*;
+    // SAFETY: AVX2 is enabled in this function.
+    let (tmin, tmax) = unsafe { slabs_avx2(node, r) };
     _mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax)
+}
+
+/// [`child_entries`] with the 8-wide slab test.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn child_entries_avx2(node: &CwBvhNode, r: &TravRay) -> ([f32; 8], u32) {
+    use std::arch::x86_64::*;
+    // SAFETY: AVX2 is enabled in this function; the store writes `entry`'s 8 floats.
+    unsafe {
+        let (tmin, tmax) = slabs_avx2(node, r);
+        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax)) as u32;
+        let mut entry = [0.0f32; 8];
+        _mm256_storeu_ps(entry.as_mut_ptr(), tmin);
+        (entry, mask)
+    }
 }
 
 /// [`intersect_node`]'s hit mask with the 8-wide box test and the per-child bits placed 8 lanes at once:
@@ -259,18 +420,27 @@ pub(super) fn has_avx2() -> bool {
 #[cfg(not(target_arch = "x86_64"))]
 #[inline(always)]
 fn child_mask(node: &CwBvhNode, r: &TravRay) -> u32 {
+    child_entries_portable(node, r).1
+}
+
+/// Portable version of [`child_entries`].
+#[cfg(not(target_arch = "x86_64"))]
+#[inline(always)]
+fn child_entries_portable(node: &CwBvhNode, r: &TravRay) -> ([f32; 8], u32) {
     let (q, inv, org, t_far) = setup(node, r);
     let (inv, org) = (inv.to_array(), org.to_array());
     let mut mask = 0u32;
+    let mut entry = [0.0f32; 8];
     for c in 0..8 {
         let t = |k: usize, axis: usize| q[k][c] as f32 * inv[axis] + org[axis];
         let tmin = t(0, 0).max(t(2, 1)).max(t(4, 2)).max(0.0);
         let tmax = t(1, 0).min(t(3, 1)).min(t(5, 2)).min(t_far);
+        entry[c] = tmin;
         if tmin <= tmax {
             mask |= 1 << c;
         }
     }
-    mask
+    (entry, mask)
 }
 
 #[cfg(test)]
