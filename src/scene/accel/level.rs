@@ -24,7 +24,7 @@ pub struct Level {
     pub(super) items: Vec<Item>,
     /// World (or object) space bounds of everything in the level.
     pub bounds: Option<(Vec3A, Vec3A)>,
-    /// Whether the tree is shallow enough for the distance-ordered nearest-hit search
+    /// Whether the tree is shallow and small enough for the distance-ordered nearest-hit search
     /// ([`NearStack::MAX_DEPTH`](super::traverse::NearStack::MAX_DEPTH)).
     pub(super) ordered: bool,
 }
@@ -98,9 +98,8 @@ impl Level {
                 Item { verts: p.verts, r: p.r }
             })
             .collect();
-        let ordered = bvh.nodes.len() >= ORDERED_MIN_NODES
-            && items.len() <= MAX_ORDERED_SLOTS
-            && super::traverse::depth(&bvh) <= super::traverse::NearStack::MAX_DEPTH;
+        let ordered =
+            items.len() <= MAX_ORDERED_SLOTS && super::traverse::depth(&bvh) <= super::traverse::NearStack::MAX_DEPTH;
         Level { bvh: Some(bvh), items, bounds: Some(bounds), ordered }
     }
 
@@ -114,10 +113,6 @@ impl Level {
         self.items.is_empty()
     }
 }
-
-/// Levels with fewer nodes keep obvhs's traversal for the nearest hit: on the Cornell box (3 nodes) the
-/// distance-ordered search's bookkeeping cost more than it saved (`path` 1.29 s against 1.27–1.28 s).
-const ORDERED_MIN_NODES: usize = 16;
 
 /// The most leaf entries the distance-ordered search can address (it packs a leaf's first slot in 28 bits).
 pub(super) const MAX_ORDERED_SLOTS: usize = 1 << 28;
