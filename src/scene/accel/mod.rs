@@ -601,7 +601,7 @@ impl NearestQuery<'_> {
 /// current limit is dropped when popped; a popped leaf's primitives go to `q`, which narrows `tr.t_max`
 /// as it finds hits. obvhs's traversal visits children in a fixed order per direction octant and never
 /// drops what it has pushed, so it enters boxes a nearer hit has already ruled out (on staircase2's `path`,
-/// 14 % more nodes and 30 % more primitive tests per ray). The tie rule ([`closer`]) makes the hit found the
+/// 9 % more nodes and 22 % more primitive tests per ray on the same tree). The tie rule ([`closer`]) makes the hit found the
 /// same in any order.
 #[inline(always)]
 fn nearest_ordered<const WIDE: bool>(bvh: &CwBvh, tr: &mut TravRay, q: &mut NearestQuery<'_>) {
@@ -615,15 +615,12 @@ fn nearest_ordered<const WIDE: bool>(bvh: &CwBvh, tr: &mut TravRay, q: &mut Near
         let node = &bvh.nodes[node_index as usize];
         let (entry, hit) = child_entries::<WIDE>(node, tr);
         let inner_mask = node.imask as u32;
-        let far = far_limit(tr.t_max);
+        // `hit` holds only children whose boxes the ray enters within the current limit.
         let mut todo = hit;
         let from = stack.len();
         while todo != 0 {
             let c = todo.trailing_zeros();
             todo &= todo - 1;
-            if entry[c as usize] > far {
-                continue;
-            }
             if inner_mask & (1 << c) != 0 {
                 // Inner children are stored in slot order from child_base_idx.
                 stack.push(node.child_base_idx + (inner_mask & ((1 << c) - 1)).count_ones(), entry[c as usize]);
