@@ -511,6 +511,12 @@ mod tests {
             if has_avx2() {
                 // SAFETY: checked just above.
                 assert_eq!(narrow, unsafe { child_mask_avx2(node, &tr) }, "ray {i}");
+                let ((wide_entry, wide_mask), (entry, mask)) =
+                    (child_entries::<true>(node, &tr), child_entries::<false>(node, &tr));
+                assert_eq!((wide_mask, narrow), (mask, mask), "ray {i}");
+                for c in (0..8).filter(|c| mask & (1 << c) != 0) {
+                    assert_eq!(wide_entry[c].to_bits(), entry[c].to_bits(), "ray {i}, child {c}");
+                }
                 for oct_inv4 in [0, 0x0404_0404, 0x0303_0303, 0x0707_0707] {
                     let wide = intersect_node::<true>(node, &tr, oct_inv4);
                     assert_eq!(wide, intersect_node::<false>(node, &tr, oct_inv4), "ray {i}, octant {oct_inv4:x}");
