@@ -23,10 +23,10 @@
 use glam::Vec3A;
 use rayon::prelude::*;
 
-use super::discontinuity::cache_points;
+use super::discontinuity::{cache_index, cache_points};
 use super::points::usable_normal;
 use super::{CacheId, CacheOracle, PlacementParams};
-use crate::cache::CacheIndex;
+use crate::cache::{CacheIndex, Neighbour};
 use crate::gbuffer::GBuffer;
 
 /// The ratio of a pixel's squared error to the leave-one-out squared error of the caches it blends,
@@ -50,17 +50,39 @@ pub fn relative_rmse(
     params: &PlacementParams,
     added_mean: f32,
 ) -> Option<f32> {
-    if oracle.len() < 2 || g.width == 0 || g.height == 0 {
-        return None;
-    }
     let points = cache_points(g, oracle);
-    let l = g.scale;
-    let lambda = params.lambda_for(if l.is_finite() && l > 0.0 { l } else { 1.0 });
-    let index = CacheIndex::new(&points, params.lookup, lambda).with_scale(l);
-    // Each cache's neighbours without it, with the weights a point at its site would give them.
-    let asks: Vec<(CacheId, Vec<(CacheId, f32)>)> = (0..points.len())
-        .into_par_iter()
-        .filter_map(|c| {
+    let index = cache_index(g, &points, params);
+    Misses::new(g, &points, &index, oracle, params)?.relative_rmse(g, &points, &index, added_mean)
+}
+
+/// Every cache's leave-one-out miss and value, for one set of caches: what both the estimate and refine's
+/// map (the local error each pixel inherits from the caches it blends) are made of.
+pub(super) struct Misses {
+    /// Per cache: its squared miss and its own value (`None`: not predicted).
+    local: Vec<Option<(f32, f32)>>,
+    /// The mean miss of the caches predicted across a crease (module doc), if any were.
+    crease: Option<f32>,
+    /// The §5 normal filter's cosine.
+    cos_max: f32,
+}
+
+impl Misses {
+    /// Asks the oracle to predict every cache from its §5 neighbours at its site (`points` and `index` as
+    /// [`cache_points`] and [`cache_index`] give them for the oracle's caches); `None` with fewer than two
+    /// caches or when the application cannot answer (it is asked about one cache first, so an application
+    /// that cannot costs one selection: an application answers for every cache or for none).
+    pub(super) fn new(
+        g: &GBuffer,
+        points: &[(Vec3A, Vec3A)],
+        index: &CacheIndex,
+        oracle: &mut dyn CacheOracle,
+        params: &PlacementParams,
+    ) -> Option<Self> {
+        if oracle.len() < 2 || g.width == 0 || g.height == 0 {
+            return None;
+        }
+        // Each cache's neighbours without it, with the weights a point at its site would give them.
+        let ask = |c: usize| -> Option<(CacheId, Vec<(CacheId, f32)>)> {
             let (p, n) = points[c];
             if !p.is_finite() {
                 return None;
@@ -71,72 +93,125 @@ pub fn relative_rmse(
             let mut w = Vec::new();
             index.interpolate_weights(&near, &mut w);
             (!w.is_empty()).then_some((c as CacheId, w))
-        })
-        .collect();
-    let answers = oracle.predict_many(&asks);
-    // Per cache: its squared miss and its own value; and the mean miss of the caches that had to be
-    // predicted across a crease (most of their neighbours' weight beyond the normal filter).
-    let cos_max = params.lookup.theta_max_deg.to_radians().cos();
-    let across = |n: Vec3A, w: &[(u32, f32)]| -> f32 {
-        w.iter().filter(|&&(id, _)| points[id as usize].1.dot(n) < cos_max).map(|&(_, wt)| wt).sum()
-    };
-    let mut local: Vec<Option<(f32, f32)>> = vec![None; points.len()];
-    let (mut crease_sum, mut crease_n) = (0f64, 0usize);
-    for ((c, w), a) in asks.iter().zip(answers) {
-        let a = a.filter(|a| a.sq_err.is_finite() && a.value.is_finite());
-        if let Some(a) = a
-            && across(points[*c as usize].1, w) > 0.5
-        {
-            crease_sum += a.sq_err as f64;
-            crease_n += 1;
+        };
+        let probe = (0..points.len()).find_map(ask)?;
+        oracle.predict_many(std::slice::from_ref(&probe)).first().copied().flatten()?;
+        let asks: Vec<(CacheId, Vec<(CacheId, f32)>)> = (0..points.len()).into_par_iter().filter_map(ask).collect();
+        let answers = oracle.predict_many(&asks);
+        // Per cache: its squared miss and its own value; and the mean miss of the caches that had to be
+        // predicted across a crease (most of their neighbours' weight beyond the normal filter).
+        let cos_max = params.lookup.theta_max_deg.to_radians().cos();
+        let across = |n: Vec3A, w: &[(u32, f32)]| -> f32 {
+            w.iter().filter(|&&(id, _)| points[id as usize].1.dot(n) < cos_max).map(|&(_, wt)| wt).sum()
+        };
+        let mut local: Vec<Option<(f32, f32)>> = vec![None; points.len()];
+        let (mut crease_sum, mut crease_n) = (0f64, 0usize);
+        for ((c, w), a) in asks.iter().zip(answers) {
+            let a = a.filter(|a| a.sq_err.is_finite() && a.value.is_finite());
+            if let Some(a) = a
+                && across(points[*c as usize].1, w) > 0.5
+            {
+                crease_sum += a.sq_err as f64;
+                crease_n += 1;
+            }
+            local[*c as usize] = a.map(|a| (a.sq_err, a.value));
         }
-        local[*c as usize] = a.map(|a| (a.sq_err, a.value));
+        if local.iter().all(Option::is_none) {
+            return None;
+        }
+        let crease = if crease_n > 0 { Some((crease_sum / crease_n as f64) as f32) } else { None };
+        Some(Misses { local, crease, cos_max })
     }
-    if local.iter().all(Option::is_none) {
-        return None;
+
+    /// At a usable pixel: the weighted mean of the squared misses of the caches it blends (a cache blended
+    /// across a crease counts with the crease caches' mean miss) and of their values; `None` where it
+    /// blends no predicted cache.
+    fn at_pixel(
+        &self,
+        points: &[(Vec3A, Vec3A)],
+        index: &CacheIndex,
+        sp: &crate::gbuffer::ShadingPoint,
+        scratch: &mut (Vec<Neighbour>, Vec<(u32, f32)>),
+    ) -> Option<(f64, f64)> {
+        let normal = usable_normal(sp)?;
+        let (near, w) = scratch;
+        index.select(sp.p, normal, near);
+        self.blend(points, index, normal, near, w)
     }
-    let crease = if crease_n > 0 { Some((crease_sum / crease_n as f64) as f32) } else { None };
-    // Per grid row: (Σ error², Σ value, grid pixels), combined in row order.
-    let rows: Vec<(f64, f64, usize)> = (0..g.height)
-        .into_par_iter()
-        .step_by(STRIDE)
-        .map(|y| {
-            let (mut e2, mut v, mut n) = (0f64, 0f64, 0usize);
-            let (mut near, mut w) = (Vec::new(), Vec::new());
-            for x in (0..g.width).step_by(STRIDE) {
-                n += 1;
-                let Some(sp) = g.get((y * g.width + x) as u32) else { continue };
-                let Some(normal) = usable_normal(sp) else { continue };
-                index.select(sp.p, normal, &mut near);
-                index.interpolate_weights(&near, &mut w);
-                let (mut se, mut sv, mut sw) = (0f64, 0f64, 0f64);
-                for &(id, wt) in &w {
-                    if let Some((sq_err, value)) = local[id as usize] {
-                        // A cache blended across a crease misses as the crease caches did, not as it did.
-                        let crossed = points[id as usize].1.dot(normal) < cos_max;
-                        let sq_err = if crossed { crease.unwrap_or(sq_err) } else { sq_err };
-                        se += wt as f64 * sq_err as f64;
-                        sv += wt as f64 * value as f64;
-                        sw += wt as f64;
+
+    /// [`Misses::at_pixel`] for a pixel with normal `normal` whose §5 selection is `near`.
+    fn blend(
+        &self,
+        points: &[(Vec3A, Vec3A)],
+        index: &CacheIndex,
+        normal: Vec3A,
+        near: &[Neighbour],
+        w: &mut Vec<(u32, f32)>,
+    ) -> Option<(f64, f64)> {
+        index.interpolate_weights(near, w);
+        let (mut se, mut sv, mut sw) = (0f64, 0f64, 0f64);
+        for &(id, wt) in w.iter() {
+            if let Some((sq_err, value)) = self.local[id as usize] {
+                // A cache blended across a crease misses as the crease caches did, not as it did.
+                let crossed = points[id as usize].1.dot(normal) < self.cos_max;
+                let sq_err = if crossed { self.crease.unwrap_or(sq_err) } else { sq_err };
+                se += wt as f64 * sq_err as f64;
+                sv += wt as f64 * value as f64;
+                sw += wt as f64;
+            }
+        }
+        (sw > 0.0).then(|| (se / sw, sv / sw))
+    }
+
+    /// The estimated relative RMSE (module doc) over every `STRIDE`-th pixel in x and y.
+    pub(super) fn relative_rmse(
+        &self,
+        g: &GBuffer,
+        points: &[(Vec3A, Vec3A)],
+        index: &CacheIndex,
+        added_mean: f32,
+    ) -> Option<f32> {
+        // Per grid row: (Σ error², Σ value, grid pixels), combined in row order.
+        let rows: Vec<(f64, f64, usize)> = (0..g.height)
+            .into_par_iter()
+            .step_by(STRIDE)
+            .map(|y| {
+                let (mut e2, mut v, mut n) = (0f64, 0f64, 0usize);
+                let mut scratch = Default::default();
+                for x in (0..g.width).step_by(STRIDE) {
+                    n += 1;
+                    let Some(sp) = g.get((y * g.width + x) as u32) else { continue };
+                    if let Some((e, val)) = self.at_pixel(points, index, sp, &mut scratch) {
+                        e2 += e;
+                        v += val;
                     }
                 }
-                if sw > 0.0 {
-                    e2 += se / sw;
-                    v += sv / sw;
-                }
-            }
-            (e2, v, n)
-        })
-        .collect();
-    let (e2, v, n) = rows.iter().fold((0f64, 0f64, 0usize), |(a, b, c), r| (a + r.0, b + r.1, c + r.2));
-    let mean = v / n as f64 + added_mean as f64;
-    (mean > 0.0).then(|| ((KAPPA as f64 * e2 / n as f64).sqrt() / mean) as f32)
+                (e2, v, n)
+            })
+            .collect();
+        let (e2, v, n) = rows.iter().fold((0f64, 0f64, 0usize), |(a, b, c), r| (a + r.0, b + r.1, c + r.2));
+        let mean = v / n as f64 + added_mean as f64;
+        (mean > 0.0).then(|| ((KAPPA as f64 * e2 / n as f64).sqrt() / mean) as f32)
+    }
+
+    /// A pixel's weighted mean squared miss of the caches it blends, from its normal and §5 selection
+    /// ([`Misses::at_pixel`]; 0 where it blends no predicted cache): the local error refine's map follows,
+    /// made from the selections its other terms use ([`super::discontinuity::selection_terms`]).
+    pub(super) fn blended<'a>(
+        &'a self,
+        points: &'a [(Vec3A, Vec3A)],
+        index: &'a CacheIndex,
+    ) -> impl Fn(Vec3A, &[Neighbour], &mut Vec<(u32, f32)>) -> f32 + Sync + 'a {
+        move |normal, near, w| self.blend(points, index, normal, near, w).map_or(0.0, |(e, _)| e as f32)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::placement::synthetic::{mask_at, mask_value};
+    use crate::placement::Prediction;
+    use crate::placement::discontinuity::selection_terms;
+    use crate::placement::synthetic::{STEP_X, mask_at, mask_value};
     use crate::placement::test_scenes as ts;
     use crate::placement::{ImageUniform, InitialPlacement, PlacementParams};
 
@@ -186,8 +261,8 @@ mod tests {
         let alone = relative_rmse(&g, &mut oracle, &p, 0.0).unwrap();
         let with_term = relative_rmse(&g, &mut oracle, &p, 10.0).unwrap();
         assert!(alone > 0.0 && with_term < alone / 5.0, "{alone} {with_term}");
-        // An oracle whose application cannot answer the leave-one-out question.
-        struct Mute<'a>(ts::MaskOracle<'a>);
+        // An oracle whose application cannot answer the leave-one-out question: asked about one cache only.
+        struct Mute<'a>(ts::MaskOracle<'a>, usize);
         impl CacheOracle for Mute<'_> {
             fn len(&self) -> usize {
                 self.0.len()
@@ -201,7 +276,50 @@ mod tests {
             fn evaluate(&mut self, sites: &[crate::gbuffer::PixelId]) {
                 self.0.evaluate(sites)
             }
+            fn predict_many(&mut self, asks: &[(CacheId, Vec<(CacheId, f32)>)]) -> Vec<Option<Prediction>> {
+                self.1 += asks.len();
+                vec![None; asks.len()]
+            }
         }
-        assert_eq!(relative_rmse(&g, &mut Mute(oracle), &p, 0.0), None);
+        let mut mute = Mute(oracle, 0);
+        assert_eq!(relative_rmse(&g, &mut mute, &p, 0.0), None);
+        assert_eq!(mute.1, 1);
+    }
+
+    #[test]
+    fn the_pixel_map_is_largest_along_the_step_the_caches_straddle() {
+        // IM caches on the flat scene: the caches either side of the hidden step predict each other badly, so
+        // the pixels that blend them carry the largest misses; far from it only the gentle ripple is missed.
+        let g = ts::flat(96, 64);
+        let p = PlacementParams::default();
+        let s1 = ImageUniform.place(&g, 150, &p, ts::SEED).unwrap();
+        let mut oracle = ts::MaskOracle::new(&g, &s1.sites);
+        let points = cache_points(&g, &oracle);
+        let index = cache_index(&g, &points, &p);
+        let misses = Misses::new(&g, &points, &index, &mut oracle, &p).unwrap();
+        let blended = misses.blended(&points, &index);
+        let map = selection_terms(&g, &index, &oracle, false, Some(&blended), 1).extra;
+        let mean_where = |near: bool| {
+            let v: Vec<f32> = (0..map.len())
+                .filter(|&i| g.points[i].as_ref().is_some_and(|sp| ((sp.p.x - STEP_X).abs() < 0.3) == near))
+                .map(|i| map[i])
+                .collect();
+            v.iter().sum::<f32>() / v.len() as f32
+        };
+        let (near, far) = (mean_where(true), mean_where(false));
+        assert!(near > 8.0 * far, "mean miss {near} along the step, {far} away from it");
+        // The tiles' shared selections give what each pixel's own selection gives (the thread count is
+        // checked with refine's contract, `placement::refine`).
+        let mut scratch = Default::default();
+        let own: Vec<f32> = g
+            .points
+            .iter()
+            .map(|sp| {
+                sp.as_ref()
+                    .and_then(|sp| misses.at_pixel(&points, &index, sp, &mut scratch))
+                    .map_or(0.0, |e| e.0 as f32)
+            })
+            .collect();
+        assert_eq!(own, map);
     }
 }

@@ -1,9 +1,10 @@
 //! STAGE 4, second stage of **refine** (beyond the paper; experiments/notes/refine.md): after an image-space
 //! uniform first stage (IM with `1 − refine_share` of the budget), the rest is added in rounds, each drawn
-//! from a fresh map of the caches placed so far: where the caches a pixel would blend disagree
-//! (Diff_avg), where the normals change (G), and where the nearest cache the pixel's §5 selection keeps is
-//! far away on the surface, for the pixel's distance from the camera (the coverage term), over a small
-//! uniform floor. Every round sees the caches of
+//! from a fresh map of the caches placed so far: where the caches a pixel would blend predict each other
+//! badly (the leave-one-out term: each cache left out in turn and predicted by the application's own
+//! shading from its neighbours, the miss it leaves), where they disagree (Diff_avg), where the normals
+//! change (G), and where the nearest cache the pixel's §5 selection keeps is far away on the surface, for
+//! the pixel's distance from the camera (the coverage term), over a small uniform floor. Every round sees the caches of
 //! the rounds before it, so refinement follows the error that remains rather than the error one map
 //! predicted, and no pixel is left far from a cache it can use (the gaps that made the clustered
 //! placements lose to IM, experiments/notes/stability.md). Given a target error instead of a count, the
@@ -18,8 +19,10 @@
 
 use rayon::prelude::*;
 
-use super::discontinuity::{cache_points, diff_and_gap_terms, geometry_term};
-use super::estimate;
+use glam::Vec3A;
+
+use super::discontinuity::{PerPixel, SelectionTerms, cache_index, cache_points, geometry_term, selection_terms};
+use super::estimate::Misses;
 use super::points::usable_normal;
 use super::{
     AdaptiveInfo, AdaptivePlacement, CacheId, CacheOracle, PlacementParams, RoundEstimate, Stage1, TargetError,
@@ -41,11 +44,21 @@ const STAGE_DRAW: u64 = 0x5246_0100;
 /// | `PlacementParams::dgs` | DgsTerms | both | whether the map has the difference and the geometry terms (importance caching omits G, as for DGS) |
 ///
 /// A round's map, on every usable pixel without a cache, is
-/// `D³ / mean(D³) + G / mean(G) + 2 · min((gap / h)², 16)` plus the floor, with D = Diff_avg / mean(Diff_avg),
+/// `4 · E / mean(E) + D³ / mean(D³) + G / mean(G) + 2 · min((gap / h)², 16)` plus the floor, with
+/// E the weighted mean, over the caches the pixel's §5 selection blends (its weights), of each cache's
+/// squared leave-one-out miss (`estimate::Misses`: the application's shading at the cache's site from its neighbours
+/// against the cache itself, the error refine's estimate is made of; absent when the application cannot
+/// predict, as importance caching), D = Diff_avg / mean(Diff_avg),
 /// where Diff_avg is DGS's mean difference of the caches the pixel's §5 selection blends (ALGORITHMS.md §4.5.3), G is Eq. 3,
 /// gap is the world distance to the nearest cache that selection keeps over the pixel's distance from the
-/// camera (a pixel that keeps none counts 16) and h is the root mean square of the gaps; the selections behind Diff_avg and gap
-/// are made on every second pixel in x and y, the others taking their grid pixel's. Unlike DGS's min–max normalisation,
+/// camera (a pixel that keeps none counts 16) and h is the root mean square of the gaps; the selections behind E, Diff_avg and gap
+/// are made on every second pixel in x and y, the others taking their grid pixel's unless an edge lies
+/// between them (`discontinuity::selection_terms`). E is what finds a face whose pixels blend the caches of
+/// another surface that pass the §5 normal filter (the staircase's steps blending the next step's caches),
+/// where the caches agree with each other and Diff_avg sees nothing: with it refine went from 2 clear
+/// losses to the best of the paper's five to none on the stability map's cache-AO cells at 320×180, and its
+/// mean RMSE from 0.91 to 0.84 of VGC+DGS's; weights 2–8 were within 2 % of each other on the staircase
+/// (experiments/notes/refine.md). Unlike DGS's min–max normalisation,
 /// dividing by the mean keeps each term's contrast: a scene whose caches disagree everywhere (sibenik's
 /// carvings) gets near-uniform rounds, one whose disagreement sits on a few edges (the staircase's steps)
 /// gets concentrated ones (the cube sharpens that further). Diff_max is left out: it peaks on single noisy
@@ -63,7 +76,7 @@ const STAGE_DRAW: u64 = 0x5246_0100;
 ///
 /// With `PlacementParams::target` (`targeterror`) the budget is a ceiling: the first stage is 1/256 of it
 /// (the registry's `first_stage_budget`), and rounds of the same maps add caches until
-/// [`estimate::relative_rmse`] is at or below the target, each round sized from the last two estimates; every
+/// the estimate ([`super::estimate::relative_rmse`], from the same misses as E) is at or below the target, each round sized from the last two estimates; every
 /// estimate is in `AdaptiveInfo::estimates`, and a target not met within the ceiling is a note.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Refine;
@@ -90,7 +103,7 @@ impl AdaptivePlacement for Refine {
                 *t = true;
             }
         }
-        let mut state = Rounds { g, params, seed, fixed, taken, info: AdaptiveInfo::default() };
+        let mut state = Rounds { g, params, seed, fixed, taken, info: AdaptiveInfo::default(), current: None };
         match params.target {
             Some(target) => state.until_target(oracle, budget, target),
             None => state.equal_rounds(oracle, budget),
@@ -108,12 +121,44 @@ struct Rounds<'a> {
     fixed: Fixed,
     taken: Vec<bool>,
     info: AdaptiveInfo,
+    /// The caches placed so far as the last map or estimate saw them (both need the same), if still current.
+    current: Option<Current>,
+}
+
+/// The caches placed so far, indexed for the §5 selection, with their leave-one-out misses (`None`: the
+/// application cannot predict a cache from its neighbours, or fewer than two caches).
+struct Current {
+    caches: usize,
+    points: Vec<(Vec3A, Vec3A)>,
+    index: CacheIndex,
+    misses: Option<Misses>,
+}
+
+impl Current {
+    fn new(g: &GBuffer, oracle: &mut dyn CacheOracle, params: &PlacementParams) -> Self {
+        let points = cache_points(g, oracle);
+        let index = cache_index(g, &points, params);
+        let misses = Misses::new(g, &points, &index, oracle, params);
+        Current { caches: oracle.len(), points, index, misses }
+    }
 }
 
 impl Rounds<'_> {
+    /// The caches placed so far ([`Current`]), made again only when caches were added since.
+    fn current(&mut self, oracle: &mut dyn CacheOracle) -> &Current {
+        let (g, params) = (self.g, self.params);
+        let stale = self.current.as_ref().is_none_or(|c| c.caches != oracle.len());
+        if stale {
+            self.current = None;
+        }
+        self.current.get_or_insert_with(|| Current::new(g, oracle, params))
+    }
+
     /// Round `r`: draws `n` caches from a fresh map and evaluates them; returns how many it added.
     fn round(&mut self, oracle: &mut dyn CacheOracle, r: usize, n: usize) -> usize {
-        let map = round_map(self.g, oracle, self.params, &self.taken, &self.fixed);
+        self.current(oracle);
+        let current = self.current.as_ref().expect("made by `current`");
+        let map = round_map(self.g, &*oracle, self.params, current, &self.taken, &self.fixed);
         let sites = super::stratified::draw(self.g.width, self.g.height, &map, n, self.seed, STAGE_DRAW + r as u64);
         sites.iter().for_each(|&id| self.taken[id as usize] = true);
         if sites.len() < n {
@@ -142,7 +187,9 @@ impl Rounds<'_> {
 
     /// The error estimate of the caches placed so far, recorded.
     fn estimate(&mut self, oracle: &mut dyn CacheOracle, target: TargetError) -> Option<f32> {
-        let e = estimate::relative_rmse(self.g, oracle, self.params, target.added_mean)?;
+        let g = self.g;
+        let current = self.current(oracle);
+        let e = current.misses.as_ref()?.relative_rmse(g, &current.points, &current.index, target.added_mean)?;
         self.info.estimates.push(RoundEstimate { caches: oracle.len(), relative_rmse: e });
         Some(e)
     }
@@ -199,6 +246,9 @@ const GAP_WEIGHT: f32 = 2.0;
 /// rounds to where the caches disagree most (the squared error of an interpolated value grows faster than
 /// the disagreement that predicts it); 1 and 2 were behind on the Cornell box and the staircase.
 const DIFF_POWER: i32 = 3;
+/// Weight of the leave-one-out term (the mean squared miss of the caches a pixel blends, over its mean)
+/// against the mean-1 difference and geometry terms.
+const MISS_WEIGHT: f32 = 4.0;
 /// The map's selections are made on every second pixel in x and y (the others take their grid pixel's), which
 /// halves what a round costs for 1–2 % of RMSE (experiments/results/refine-tuning/MANIFEST.md).
 const STRIDE: usize = 2;
@@ -208,17 +258,17 @@ fn round_map(
     g: &GBuffer,
     oracle: &dyn CacheOracle,
     params: &PlacementParams,
+    current: &Current,
     taken: &[bool],
     fixed: &Fixed,
 ) -> Vec<f32> {
     let mask = &fixed.mask;
     let mut d = vec![0f32; g.width * g.height];
     if !oracle.is_empty() {
-        let caches = cache_points(g, oracle);
-        let l = g.scale;
-        let lambda = params.lambda_for(if l.is_finite() && l > 0.0 { l } else { 1.0 });
-        let index = CacheIndex::new(&caches, params.lookup, lambda).with_scale(l);
-        let (mut avg, _, gap) = diff_and_gap_terms(g, &index, oracle, true, STRIDE);
+        let blended = current.misses.as_ref().map(|m| m.blended(&current.points, &current.index));
+        let extra = blended.as_ref().map(|f| f as PerPixel<'_>);
+        let SelectionTerms { mut avg, gap, extra: mut miss, .. } =
+            selection_terms(g, &current.index, oracle, true, extra, STRIDE);
         if params.dgs.diff && oracle.len() >= 2 {
             relative(&mut avg, mask);
             avg.par_iter_mut().for_each(|a| *a = a.powi(DIFF_POWER));
@@ -233,6 +283,10 @@ fn round_map(
             .fold((0f64, 0usize), |(s, n), (&x, _)| (s + (x as f64).powi(2), n + 1));
         let spacing = if count > 0 { ((sum / count as f64).sqrt() as f32).max(f32::MIN_POSITIVE) } else { 1.0 };
         d.par_iter_mut().zip(&gap).for_each(|(d, &gp)| *d += GAP_WEIGHT * ((gp / spacing).powi(2)).min(GAP_CAP));
+        if !miss.is_empty() {
+            relative(&mut miss, mask);
+            d.par_iter_mut().zip(&miss).for_each(|(d, m)| *d += MISS_WEIGHT * m);
+        }
     }
     if let Some(geo) = &fixed.geometry {
         d.par_iter_mut().zip(geo).for_each(|(d, x)| *d += x);
