@@ -52,7 +52,7 @@ pub fn relative_rmse(
 ) -> Option<f32> {
     let points = cache_points(g, oracle);
     let index = cache_index(g, &points, params);
-    Misses::new(g, &points, &index, oracle, params)?.relative_rmse(g, &points, &index, added_mean)
+    Misses::new(g, &points, &index, oracle)?.relative_rmse(g, &points, &index, added_mean)
 }
 
 /// Every cache's leave-one-out miss and value, for one set of caches: what both the estimate and refine's
@@ -76,7 +76,6 @@ impl Misses {
         points: &[(Vec3A, Vec3A)],
         index: &CacheIndex,
         oracle: &mut dyn CacheOracle,
-        params: &PlacementParams,
     ) -> Option<Self> {
         if oracle.len() < 2 || g.width == 0 || g.height == 0 {
             return None;
@@ -100,7 +99,7 @@ impl Misses {
         let answers = oracle.predict_many(&asks);
         // Per cache: its squared miss and its own value; and the mean miss of the caches that had to be
         // predicted across a crease (most of their neighbours' weight beyond the normal filter).
-        let cos_max = params.lookup.theta_max_deg.to_radians().cos();
+        let cos_max = index.lookup().theta_max_deg.to_radians().cos();
         let across = |n: Vec3A, w: &[(u32, f32)]| -> f32 {
             w.iter().filter(|&&(id, _)| points[id as usize].1.dot(n) < cos_max).map(|&(_, wt)| wt).sum()
         };
@@ -287,7 +286,7 @@ mod tests {
     }
 
     #[test]
-    fn the_pixel_map_is_largest_along_the_step_the_caches_straddle() {
+    fn the_blended_misses_are_largest_along_the_step_the_caches_straddle() {
         // IM caches on the flat scene: the caches either side of the hidden step predict each other badly, so
         // the pixels that blend them carry the largest misses; far from it only the gentle ripple is missed.
         let g = ts::flat(96, 64);
@@ -296,7 +295,7 @@ mod tests {
         let mut oracle = ts::MaskOracle::new(&g, &s1.sites);
         let points = cache_points(&g, &oracle);
         let index = cache_index(&g, &points, &p);
-        let misses = Misses::new(&g, &points, &index, &mut oracle, &p).unwrap();
+        let misses = Misses::new(&g, &points, &index, &mut oracle).unwrap();
         let blended = misses.blended(&points, &index);
         let map = selection_terms(&g, &index, &oracle, false, Some(&blended), 1).extra;
         let mean_where = |near: bool| {

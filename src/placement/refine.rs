@@ -44,18 +44,18 @@ const STAGE_DRAW: u64 = 0x5246_0100;
 /// | `PlacementParams::dgs` | DgsTerms | both | whether the map has the difference and the geometry terms (importance caching omits G, as for DGS) |
 ///
 /// A round's map, on every usable pixel without a cache, is
-/// `4 · E / mean(E) + D³ / mean(D³) + G / mean(G) + 2 · min((gap / h)², 16)` plus the floor, with
-/// E the weighted mean, over the caches the pixel's §5 selection blends (its weights), of each cache's
-/// squared leave-one-out miss (`estimate::Misses`: the application's shading at the cache's site from its neighbours
-/// against the cache itself, the error refine's estimate is made of; absent when the application cannot
-/// predict, as importance caching), D = Diff_avg / mean(Diff_avg),
-/// where Diff_avg is DGS's mean difference of the caches the pixel's §5 selection blends (ALGORITHMS.md §4.5.3), G is Eq. 3,
-/// gap is the world distance to the nearest cache that selection keeps over the pixel's distance from the
-/// camera (a pixel that keeps none counts 16) and h is the root mean square of the gaps; the selections behind E, Diff_avg and gap
-/// are made on every second pixel in x and y, the others taking their grid pixel's unless an edge lies
-/// between them (`discontinuity::selection_terms`). E is what finds a face whose pixels blend the caches of
-/// another surface that pass the §5 normal filter (the staircase's steps blending the next step's caches),
-/// where the caches agree with each other and Diff_avg sees nothing: with it refine went from 2 clear
+/// `4 · E / mean(E) + D³ / mean(D³) + G / mean(G) + 2 · min((gap / h)², 16)` plus the floor, with E the
+/// weighted mean, over the caches the pixel's §5 selection blends (its weights), of each cache's squared
+/// leave-one-out miss (`estimate::Misses`: the application's shading at the cache's site from its
+/// neighbours against the cache itself, the error refine's estimate is made of; absent when the application
+/// cannot predict, as importance caching), D = Diff_avg / mean(Diff_avg), where Diff_avg is DGS's mean
+/// difference of the caches the pixel's §5 selection blends (ALGORITHMS.md §4.5.3), G is Eq. 3, gap is the
+/// world distance to the nearest cache that selection keeps over the pixel's distance from the camera (a
+/// pixel that keeps none counts 16) and h is the root mean square of the gaps. The selections behind E,
+/// Diff_avg and gap are made on every second pixel in x and y, the others taking their grid pixel's unless an
+/// edge lies between them (`discontinuity::selection_terms`). E is what finds a face whose pixels blend the
+/// caches of another surface that pass the §5 normal filter (the staircase's steps blending the next step's
+/// caches), where the caches agree with each other and Diff_avg sees nothing: with it refine went from 2 clear
 /// losses to the best of the paper's five to none on the stability map's cache-AO cells at 320×180, and its
 /// mean RMSE from 0.91 to 0.84 of VGC+DGS's; weights 2–8 were within 2 % of each other on the staircase
 /// (experiments/notes/refine.md). Unlike DGS's min–max normalisation,
@@ -76,8 +76,9 @@ const STAGE_DRAW: u64 = 0x5246_0100;
 ///
 /// With `PlacementParams::target` (`targeterror`) the budget is a ceiling: the first stage is 1/256 of it
 /// (the registry's `first_stage_budget`), and rounds of the same maps add caches until
-/// the estimate ([`super::estimate::relative_rmse`], from the same misses as E) is at or below the target, each round sized from the last two estimates; every
-/// estimate is in `AdaptiveInfo::estimates`, and a target not met within the ceiling is a note.
+/// the estimate ([`super::estimate::relative_rmse`], from the same misses as E) is at or below the target,
+/// each round sized from the last two estimates; every estimate is in `AdaptiveInfo::estimates`, and a
+/// target not met within the ceiling is a note.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Refine;
 
@@ -138,7 +139,7 @@ impl Current {
     fn new(g: &GBuffer, oracle: &mut dyn CacheOracle, params: &PlacementParams) -> Self {
         let points = cache_points(g, oracle);
         let index = cache_index(g, &points, params);
-        let misses = Misses::new(g, &points, &index, oracle, params);
+        let misses = Misses::new(g, &points, &index, oracle);
         Current { caches: oracle.len(), points, index, misses }
     }
 }
