@@ -20,8 +20,21 @@ fn room() -> PathBuf {
 
 /// The shipped room with cache AO at 128×96, placed by `placement` with `target` and a ceiling of every pixel.
 fn render(placement: Placement, target: Option<f64>, caches: usize) -> cachert::integrator::RenderOutput {
+    render_with("cacheao", &[], placement, target, caches)
+}
+
+/// The shipped room at 128×96 with `integrator` and its parameters `set`, placed by `placement` with `target`
+/// and a ceiling of `caches`.
+fn render_with(
+    integrator: &str,
+    set: &[(&str, &str)],
+    placement: Placement,
+    target: Option<f64>,
+    caches: usize,
+) -> cachert::integrator::RenderOutput {
     let s = RenderSettings {
-        integrator: Some("cacheao".into()),
+        integrator: Some(integrator.into()),
+        set: set.iter().map(|&(k, v)| (k.to_string(), v.to_string())).collect(),
         cache: CacheOverrides {
             placement: Some(placement),
             caches: Some(caches),
@@ -56,6 +69,28 @@ fn the_achieved_error_is_near_the_target_and_the_estimates_are_reported() {
         let ratio = achieved / target;
         assert!((0.67..=1.5).contains(&ratio), "target {target}: achieved {achieved:.4} ({ratio:.2}×)");
         assert!(stats.total_caches < 128 * 96 / 2, "{} caches for {target}", stats.total_caches);
+    }
+}
+
+#[test]
+fn importance_caching_meets_a_target_from_the_noise_its_neighbours_sample_with() {
+    // Its shading is unbiased: the estimate is the variance of a pixel drawing lights from a cache's
+    // neighbours' distributions (src/application/importance/leave_one_out.rs), not a miss of its value.
+    let imc = |placement, target| render_with("importancecache", &[("vpls", "1024")], placement, target, 1_000_000);
+    let reference = imc(Placement::Reference, None).image;
+    for target in [0.05, 0.1] {
+        let out = imc(Placement::Strategy("refine"), Some(target));
+        let stats = &out.cache.as_ref().unwrap().stats;
+        let achieved = relative_rmse(&out.image, &reference);
+        let est = &stats.error_estimates;
+        println!(
+            "importance caching, target {target}: {} caches, estimates {est:?}, achieved {achieved:.4}",
+            stats.total_caches
+        );
+        assert!(est.last().is_some_and(|e| e.relative_rmse as f64 <= target), "{est:?}");
+        assert!(stats.notes.iter().all(|n| !n.contains("targeterror")), "{:?}", stats.notes);
+        let ratio = achieved / target;
+        assert!((0.67..=1.5).contains(&ratio), "target {target}: achieved {achieved:.4} ({ratio:.2}×)");
     }
 }
 

@@ -26,7 +26,7 @@ use crate::scene::Scene;
 use crate::scene::accel::OccluderHint;
 use crate::scene::ray::{Ray, RayCounters, offset_ray_origin};
 
-use super::{Application, Baseline, Neighbour, PerSample, Study};
+use super::{Application, Baseline, LeaveOneOut, Neighbour, PerSample, Study};
 
 /// A visibility cache: one bit per gathering direction and the AO value.
 #[derive(Clone, Debug, PartialEq)]
@@ -192,9 +192,12 @@ impl Application for CacheAo {
         _: &ShadingPoint,
         own: &VisibilityRecord,
         near: &[Neighbour<'_, VisibilityRecord>],
-    ) -> Option<([f32; 3], [f32; 3])> {
+        _: u32,
+    ) -> Option<LeaveOneOut> {
         let wsum: f32 = near.iter().map(|c| c.weight).sum();
-        (wsum > 0.0).then(|| ([near.iter().map(|c| c.weight * c.record.ao).sum::<f32>() / wsum; 3], [own.ao; 3]))
+        (wsum > 0.0).then(|| {
+            LeaveOneOut::values([near.iter().map(|c| c.weight * c.record.ao).sum::<f32>() / wsum; 3], [own.ao; 3])
+        })
     }
 
     fn reference(&self, scene: &&Scene, s: &ShadingPoint, _: &mut Rng, _: Stratum, rays: &mut RayCounters) -> [f32; 3] {

@@ -45,7 +45,7 @@ use crate::shading::light::LightSelect;
 use crate::shading::lighting::{PassThrough, ShadePoint, Shading, estimate_direct};
 use crate::shading::{Spectrum, luminance};
 
-use super::{Application, CachePlan, Neighbour, PerPixelTerm, PerSample, Study};
+use super::{Application, CachePlan, LeaveOneOut, Neighbour, PerPixelTerm, PerSample, Study};
 
 /// Samples of the fixed set that estimates ρ_hd of non-Lambertian lobes (an 8×8 stratified grid).
 const RHO_SIDE: usize = 8;
@@ -460,11 +460,12 @@ impl Application for IrradianceCache {
         at: &ShadingPoint,
         own: &IrradianceRecord,
         near: &[Neighbour<'_, IrradianceRecord>],
-    ) -> Option<([f32; 3], [f32; 3])> {
+        _: u32,
+    ) -> Option<LeaveOneOut> {
         let (mut rng, stratum, mut rays) = (Rng::new(0), Stratum::new(0, 0, 0, 1), RayCounters::default());
         let alone = [Neighbour { record: own, p: at.p, n: at.n, weight: 1.0 }];
         let own = self.shade(cx, at, &alone, &mut rng, stratum, &mut rays);
-        (!near.is_empty()).then(|| (self.shade(cx, at, near, &mut rng, stratum, &mut rays), own))
+        (!near.is_empty()).then(|| LeaveOneOut::values(self.shade(cx, at, near, &mut rng, stratum, &mut rays), own))
     }
 
     fn reference(&self, cx: &Lit<'_>, s: &ShadingPoint, rng: &mut Rng, _: Stratum, rays: &mut RayCounters) -> [f32; 3] {

@@ -65,6 +65,27 @@ pub struct Neighbour<'a, R> {
     pub weight: f32,
 }
 
+/// What shading at a cache's site makes of its neighbours against the cache alone ([`Application::predict`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LeaveOneOut {
+    /// The value shading gives there from the neighbours; its expectation where shading draws.
+    pub from_others: [f32; 3],
+    /// The value shading gives there from the cache alone.
+    pub alone: [f32; 3],
+    /// The variance of a pixel's value there (the mean of its sub-pixel samples) from the neighbours about
+    /// `from_others`, the colour channels' mean (0 where shading draws nothing).
+    pub variance: f32,
+    /// The same from the cache alone: the noise a pixel there keeps however many caches are added.
+    pub own_variance: f32,
+}
+
+impl LeaveOneOut {
+    /// A prediction of an application whose shading draws nothing: the two values, no variance.
+    pub fn values(from_others: [f32; 3], alone: [f32; 3]) -> Self {
+        LeaveOneOut { from_others, alone, variance: 0.0, own_variance: 0.0 }
+    }
+}
+
 /// The per-pixel integrator an application's images can be compared with (`experiment --ao-samples`): its
 /// name, the parameters that make it compute the same quantity, the parameter that takes the ray count,
 /// and the factor that brings its values to the application's scale.
@@ -113,6 +134,12 @@ pub struct CachePlan {
     /// record differences (the ablations `vgc+dgs:diff` and `vgc+dgs:geom` fix their terms whatever this
     /// says). Importance caching turns it off: the paper found it does better without.
     pub dgs_geometry: bool,
+    /// Whether the `refine` placement's map has the leave-one-out term (where a cache's neighbours predict it
+    /// badly, [`Application::predict`]); refine's error estimate, for a target error, asks
+    /// [`Application::predict`] whatever this says. Importance caching turns it off: measured, the term
+    /// moved none of its stability-map cells beyond their seeds' spread and made its placement stages
+    /// 1.19–1.29× as long (experiments/notes/refine.md).
+    pub refine_misses: bool,
     /// `Some(why)` when these settings are a per-sample estimator that reads no caches: the driver places
     /// none, shades every sample with [`Application::reference`] whatever the placement, and notes `why`
     /// (importance caching's many-light baselines, `sampling uniform` or `power`).
@@ -135,6 +162,7 @@ impl Default for CachePlan {
     fn default() -> Self {
         CachePlan {
             dgs_geometry: true,
+            refine_misses: true,
             shade_by_reference: None,
             added_per_pixel: None,
             follow_specular: false,
@@ -282,17 +310,19 @@ pub trait Application: Sync + Sized {
         rays: &mut RayCounters,
     ) -> [f32; 3];
 
-    /// The leave-one-out question of refine's error estimate: the value shading at a cache's own site `at`
-    /// gives from the caches `near` (the cache itself not among them) and from `own` alone, or `None` when
-    /// the application cannot say (the default). Asked while placing, before [`Application::finish_record`].
+    /// The leave-one-out question of refine's error estimate: what shading a pixel's `samples` sub-pixel
+    /// samples at a cache's own site `at` makes of the caches `near` (the cache itself not among them)
+    /// against what it makes of `own` alone, or `None` when the application cannot say (the default). Asked
+    /// while placing, before [`Application::finish_record`].
     fn predict(
         &self,
         cx: &Self::Prepared<'_>,
         at: &ShadingPoint,
         own: &Self::Record,
         near: &[Neighbour<'_, Self::Record>],
-    ) -> Option<([f32; 3], [f32; 3])> {
-        let _ = (cx, at, own, near);
+        samples: u32,
+    ) -> Option<LeaveOneOut> {
+        let _ = (cx, at, own, near, samples);
         None
     }
 

@@ -94,9 +94,9 @@ const EDGE_OFFSET: f32 = 0.002;
 /// or the pixel lies off its tangent plane by more than [`EDGE_OFFSET`]: then the pixel is looked up
 /// itself, so that thin faces and creases keep their own (refine's leave-one-out term, which finds them,
 /// lost 2.5 % of RMSE over the stability map's cache-AO cells at 320×180 without this). Without `extra`
-/// (importance caching, which cannot predict) the edges are not looked up: on sibenik's carvings they raised
-/// its placement time by up to 15 % (experiments/results/refine-tuning/2026-11-28b/). `BAND` must be a
-/// multiple of s; s = 1 looks every pixel up.
+/// (an application that cannot predict) the edges are not looked up: they cost placement time (up to 15 %
+/// for importance caching on sibenik's carvings, experiments/results/refine-tuning/2026-11-28b/) and only the
+/// leave-one-out term needed them. `BAND` must be a multiple of s; s = 1 looks every pixel up.
 fn gather_band(
     g: &GBuffer,
     index: &CacheIndex,

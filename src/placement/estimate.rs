@@ -2,13 +2,15 @@
 //! RMSE, the image the caches placed so far would be from the per-sample reference — made without the
 //! reference, from the caches alone.
 //!
-//! Every cache is left out in turn and the application's own shading predicts it from the caches its §5
-//! selection blends at its site ([`CacheOracle::predict_many`]); the squared miss is that cache's local
-//! error. A pixel's error is the weighted mean of the local errors of the caches it blends (the weights of
-//! ALGORITHMS.md §5), scaled by [`KAPPA`], and its value the weighted mean of their own values; the
-//! estimate is sqrt(mean error²) / mean value over the image. A cache's miss is measured one cache
-//! spacing from its neighbours, where a pixel sits a fraction of a spacing from its caches: [`KAPPA`] is
-//! the ratio, measured (experiments/results/refine-target/).
+//! Every cache is left out in turn and the application's own shading predicts it from the caches its §5 selection
+//! blends at its site ([`CacheOracle::predict_many`]); the squared miss is that cache's local error. Where shading
+//! draws (importance caching), the miss is the variance of a pixel's samples drawn from the neighbours, split into what
+//! more caches can remove and the floor the pixel keeps with the cache itself ([`super::Prediction`]): refine's map
+//! follows the first, the estimate counts both. A pixel's error is the weighted mean of the local errors of the caches
+//! it blends (the weights of ALGORITHMS.md §5), scaled by [`KAPPA`], and its value the weighted mean of their own
+//! values; the estimate is sqrt(mean error²) / mean value over the image. A cache's miss is measured one cache spacing
+//! from its neighbours, where a pixel sits a fraction of a spacing from its caches: [`KAPPA`] is the ratio, measured
+//! (experiments/results/refine-target/).
 //!
 //! One refinement: a cache a pixel blends across a crease (its normal beyond the §5 normal filter of the
 //! pixel's) counts with the mean miss of the caches that were themselves predicted across a crease (most of
@@ -58,8 +60,9 @@ pub fn relative_rmse(
 /// Every cache's leave-one-out miss and value, for one set of caches: what both the estimate and refine's
 /// map (the local error each pixel inherits from the caches it blends) are made of.
 pub(super) struct Misses {
-    /// Per cache: its squared miss and its own value (`None`: not predicted).
-    local: Vec<Option<(f32, f32)>>,
+    /// Per cache: its squared miss, the floor of its error and its own value ([`super::Prediction`];
+    /// `None`: not predicted).
+    local: Vec<Option<(f32, f32, f32)>>,
     /// The mean miss of the caches predicted across a crease (module doc), if any were.
     crease: Option<f32>,
     /// The §5 normal filter's cosine.
@@ -103,17 +106,17 @@ impl Misses {
         let across = |n: Vec3A, w: &[(u32, f32)]| -> f32 {
             w.iter().filter(|&&(id, _)| points[id as usize].1.dot(n) < cos_max).map(|&(_, wt)| wt).sum()
         };
-        let mut local: Vec<Option<(f32, f32)>> = vec![None; points.len()];
+        let mut local: Vec<Option<(f32, f32, f32)>> = vec![None; points.len()];
         let (mut crease_sum, mut crease_n) = (0f64, 0usize);
         for ((c, w), a) in asks.iter().zip(answers) {
-            let a = a.filter(|a| a.sq_err.is_finite() && a.value.is_finite());
+            let a = a.filter(|a| a.sq_err.is_finite() && a.floor.is_finite() && a.value.is_finite());
             if let Some(a) = a
                 && across(points[*c as usize].1, w) > 0.5
             {
                 crease_sum += a.sq_err as f64;
                 crease_n += 1;
             }
-            local[*c as usize] = a.map(|a| (a.sq_err, a.value));
+            local[*c as usize] = a.map(|a| (a.sq_err, a.floor, a.value));
         }
         if local.iter().all(Option::is_none) {
             return None;
@@ -122,16 +125,16 @@ impl Misses {
         Some(Misses { local, crease, cos_max })
     }
 
-    /// At a usable pixel: the weighted mean of the squared misses of the caches it blends (a cache blended
-    /// across a crease counts with the crease caches' mean miss) and of their values; `None` where it
-    /// blends no predicted cache.
+    /// At a usable pixel: the weighted means over the caches it blends of their squared misses (a cache
+    /// blended across a crease counts with the crease caches' mean miss), of their floors and of their
+    /// values; `None` where it blends no predicted cache.
     fn at_pixel(
         &self,
         points: &[(Vec3A, Vec3A)],
         index: &CacheIndex,
         sp: &crate::gbuffer::ShadingPoint,
         scratch: &mut (Vec<Neighbour>, Vec<(u32, f32)>),
-    ) -> Option<(f64, f64)> {
+    ) -> Option<(f64, f64, f64)> {
         let normal = usable_normal(sp)?;
         let (near, w) = scratch;
         index.select(sp.p, normal, near);
@@ -146,20 +149,21 @@ impl Misses {
         normal: Vec3A,
         near: &[Neighbour],
         w: &mut Vec<(u32, f32)>,
-    ) -> Option<(f64, f64)> {
+    ) -> Option<(f64, f64, f64)> {
         index.interpolate_weights(near, w);
-        let (mut se, mut sv, mut sw) = (0f64, 0f64, 0f64);
+        let (mut se, mut sf, mut sv, mut sw) = (0f64, 0f64, 0f64, 0f64);
         for &(id, wt) in w.iter() {
-            if let Some((sq_err, value)) = self.local[id as usize] {
+            if let Some((sq_err, floor, value)) = self.local[id as usize] {
                 // A cache blended across a crease misses as the crease caches did, not as it did.
                 let crossed = points[id as usize].1.dot(normal) < self.cos_max;
                 let sq_err = if crossed { self.crease.unwrap_or(sq_err) } else { sq_err };
                 se += wt as f64 * sq_err as f64;
+                sf += wt as f64 * floor as f64;
                 sv += wt as f64 * value as f64;
                 sw += wt as f64;
             }
         }
-        (sw > 0.0).then(|| (se / sw, sv / sw))
+        (sw > 0.0).then(|| (se / sw, sf / sw, sv / sw))
     }
 
     /// The estimated relative RMSE (module doc) over every `STRIDE`-th pixel in x and y.
@@ -170,27 +174,30 @@ impl Misses {
         index: &CacheIndex,
         added_mean: f32,
     ) -> Option<f32> {
-        // Per grid row: (Σ error², Σ value, grid pixels), combined in row order.
-        let rows: Vec<(f64, f64, usize)> = (0..g.height)
+        // Per grid row: (Σ error², Σ floor, Σ value, grid pixels), combined in row order.
+        let rows: Vec<(f64, f64, f64, usize)> = (0..g.height)
             .into_par_iter()
             .step_by(STRIDE)
             .map(|y| {
-                let (mut e2, mut v, mut n) = (0f64, 0f64, 0usize);
+                let (mut e2, mut f2, mut v, mut n) = (0f64, 0f64, 0f64, 0usize);
                 let mut scratch = Default::default();
                 for x in (0..g.width).step_by(STRIDE) {
                     n += 1;
                     let Some(sp) = g.get((y * g.width + x) as u32) else { continue };
-                    if let Some((e, val)) = self.at_pixel(points, index, sp, &mut scratch) {
+                    if let Some((e, floor, val)) = self.at_pixel(points, index, sp, &mut scratch) {
                         e2 += e;
+                        f2 += floor;
                         v += val;
                     }
                 }
-                (e2, v, n)
+                (e2, f2, v, n)
             })
             .collect();
-        let (e2, v, n) = rows.iter().fold((0f64, 0f64, 0usize), |(a, b, c), r| (a + r.0, b + r.1, c + r.2));
+        let (e2, f2, v, n) =
+            rows.iter().fold((0f64, 0f64, 0f64, 0usize), |(a, b, c, d), r| (a + r.0, b + r.1, c + r.2, d + r.3));
         let mean = v / n as f64 + added_mean as f64;
-        (mean > 0.0).then(|| ((KAPPA as f64 * e2 / n as f64).sqrt() / mean) as f32)
+        // KAPPA scales the misses, measured a cache spacing away; the floor is a pixel's own.
+        (mean > 0.0).then(|| (((KAPPA as f64 * e2 + f2) / n as f64).sqrt() / mean) as f32)
     }
 
     /// A pixel's weighted mean squared miss of the caches it blends, from its normal and §5 selection
@@ -201,7 +208,7 @@ impl Misses {
         points: &'a [(Vec3A, Vec3A)],
         index: &'a CacheIndex,
     ) -> impl Fn(Vec3A, &[Neighbour], &mut Vec<(u32, f32)>) -> f32 + Sync + 'a {
-        move |normal, near, w| self.blend(points, index, normal, near, w).map_or(0.0, |(e, _)| e as f32)
+        move |normal, near, w| self.blend(points, index, normal, near, w).map_or(0.0, |(e, _, _)| e as f32)
     }
 }
 

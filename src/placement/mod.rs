@@ -148,12 +148,16 @@ pub trait CacheOracle {
     }
 }
 
-/// What a cache's neighbours predict at its site ([`CacheOracle::predict_many`]), in the image's units: the
-/// colour channels' mean of the squared difference and of the cache's own value.
+/// What a cache's neighbours predict at its site ([`CacheOracle::predict_many`]), in the image's units (the
+/// colour channels' mean): the squared error of a pixel there that more caches can remove, what remains of
+/// it with the cache itself, and the cache's own value.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Prediction {
-    /// Mean over the colour channels of (value from the others − value from the cache alone)².
+    /// (Value from the others − value from the cache alone)², plus, where shading draws, the pixel's variance
+    /// from the others over its variance from the cache alone.
     pub sq_err: f32,
+    /// The pixel's variance from the cache alone (0 where shading draws nothing): the error's floor.
+    pub floor: f32,
     /// Mean over the colour channels of the value from the cache alone.
     pub value: f32,
 }
@@ -256,6 +260,9 @@ pub struct PlacementParams {
     pub refine_rounds: u32,
     /// refine: the uniform floor added to each round's map, as a fraction of the map's mean.
     pub refine_floor: f32,
+    /// refine: whether each round's map has the leave-one-out term (the application's plan says; its error
+    /// estimate asks the same question whatever this says).
+    pub refine_misses: bool,
     /// refine: place caches until this error is estimated met (the budget is then a ceiling); `None`:
     /// place the whole budget.
     pub target: Option<TargetError>,
@@ -278,6 +285,7 @@ impl Default for PlacementParams {
             refine_share: 0.8,
             refine_rounds: 3,
             refine_floor: 0.1,
+            refine_misses: true,
             target: None,
         }
     }

@@ -42,25 +42,25 @@ const STAGE_DRAW: u64 = 0x5246_0100;
 /// | `PlacementParams::refine_rounds` | u32 | 3 | rounds; the share is split evenly over them |
 /// | `PlacementParams::refine_floor` | f32 | 0.1 | uniform floor, as a fraction of the map's mean over free usable pixels |
 /// | `PlacementParams::dgs` | DgsTerms | both | whether the map has the difference and the geometry terms (importance caching omits G, as for DGS) |
+/// | `PlacementParams::refine_misses` | bool | true | whether the map has the leave-one-out term E (importance caching omits it) |
 ///
-/// A round's map, on every usable pixel without a cache, is
-/// `4 · E / mean(E) + D³ / mean(D³) + G / mean(G) + 2 · min((gap / h)², 16)` plus the floor, with E the
-/// weighted mean, over the caches the pixel's §5 selection blends (its weights), of each cache's squared
-/// leave-one-out miss (`estimate::Misses`: the application's shading at the cache's site from its
-/// neighbours against the cache itself, the error refine's estimate is made of; absent when the application
-/// cannot predict, as importance caching), D = Diff_avg / mean(Diff_avg), where Diff_avg is DGS's mean
-/// difference of the caches the pixel's §5 selection blends (ALGORITHMS.md §4.5.3), G is Eq. 3, gap is the
-/// world distance to the nearest cache that selection keeps over the pixel's distance from the camera (a
-/// pixel that keeps none counts 16) and h is the root mean square of the gaps. The selections behind E,
-/// Diff_avg and gap are made on every second pixel in x and y, the others taking their grid pixel's unless an
-/// edge lies between them (`discontinuity::selection_terms`). E is what finds a face whose pixels blend the
-/// caches of another surface that pass the §5 normal filter (the staircase's steps blending the next step's
-/// caches), where the caches agree with each other and Diff_avg sees nothing: with it refine went from 2 clear
-/// losses to the best of the paper's five to none on the stability map's cache-AO cells at 320×180, and its
-/// mean RMSE from 0.91 to 0.84 of VGC+DGS's; weights 2–8 were within 2 % of each other on the staircase
-/// (experiments/notes/refine.md). Unlike DGS's min–max normalisation,
-/// dividing by the mean keeps each term's contrast: a scene whose caches disagree everywhere (sibenik's
-/// carvings) gets near-uniform rounds, one whose disagreement sits on a few edges (the staircase's steps)
+/// A round's map, on every usable pixel without a cache, is `4 · E / mean(E) + D³ / mean(D³) + G / mean(G) + 2 ·
+/// min((gap / h)², 16)` plus the floor, with E the weighted mean, over the caches the pixel's §5 selection blends (its
+/// weights), of each cache's squared leave-one-out miss (`estimate::Misses`: the application's shading at the cache's
+/// site from its neighbours against the cache itself, the error refine's estimate is made of; where shading draws, the
+/// variance of a pixel's samples from the neighbours less what they keep from the cache alone; absent when the
+/// application cannot predict, or when its plan leaves the term out, as importance caching's does), D = Diff_avg /
+/// mean(Diff_avg), where Diff_avg is DGS's mean difference of the caches the pixel's §5 selection blends (ALGORITHMS.md
+/// §4.5.3), G is Eq. 3, gap is the world distance to the nearest cache that selection keeps over the pixel's distance
+/// from the camera (a pixel that keeps none counts 16) and h is the root mean square of the gaps. The selections behind
+/// E, Diff_avg and gap are made on every second pixel in x and y, the others taking their grid pixel's unless an edge
+/// lies between them (`discontinuity::selection_terms`). E is what finds a face whose pixels blend the caches of
+/// another surface that pass the §5 normal filter (the staircase's steps blending the next step's caches), where the
+/// caches agree with each other and Diff_avg sees nothing: with it refine went from 2 clear losses to the best of the
+/// paper's five to none on the stability map's cache-AO cells at 320×180, and its mean RMSE from 0.91 to 0.84 of
+/// VGC+DGS's; weights 2–8 were within 2 % of each other on the staircase (experiments/notes/refine.md). Unlike DGS's
+/// min–max normalisation, dividing by the mean keeps each term's contrast: a scene whose caches disagree everywhere
+/// (sibenik's carvings) gets near-uniform rounds, one whose disagreement sits on a few edges (the staircase's steps)
 /// gets concentrated ones (the cube sharpens that further). Diff_max is left out: it peaks on single noisy
 /// pairs. The weights were chosen on the cache-AO cells of the stability map at 160×90 and 320×180,
 /// experiments/notes/refine.md and experiments/results/refine-tuning/. A round's caches are one per equal
@@ -136,10 +136,12 @@ struct Current {
 }
 
 impl Current {
+    /// The caches placed so far; their misses only where the map or the estimate reads them.
     fn new(g: &GBuffer, oracle: &mut dyn CacheOracle, params: &PlacementParams) -> Self {
         let points = cache_points(g, oracle);
         let index = cache_index(g, &points, params);
-        let misses = Misses::new(g, &points, &index, oracle);
+        let wanted = params.refine_misses || params.target.is_some();
+        let misses = if wanted { Misses::new(g, &points, &index, oracle) } else { None };
         Current { caches: oracle.len(), points, index, misses }
     }
 }
@@ -266,7 +268,8 @@ fn round_map(
     let mask = &fixed.mask;
     let mut d = vec![0f32; g.width * g.height];
     if !oracle.is_empty() {
-        let blended = current.misses.as_ref().map(|m| m.blended(&current.points, &current.index));
+        let misses = current.misses.as_ref().filter(|_| params.refine_misses);
+        let blended = misses.map(|m| m.blended(&current.points, &current.index));
         let extra = blended.as_ref().map(|f| f as PerPixel<'_>);
         let SelectionTerms { mut avg, gap, extra: mut miss, .. } =
             selection_terms(g, &current.index, oracle, true, extra, STRIDE);

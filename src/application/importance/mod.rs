@@ -34,6 +34,7 @@
 
 mod compensation;
 pub mod distribution;
+mod leave_one_out;
 pub mod lobe;
 pub mod mixture;
 pub mod params;
@@ -46,6 +47,7 @@ use crate::error::{Error, Result, Warnings};
 use crate::gbuffer::ShadingPoint;
 use crate::gbuffer::scale::SceneScale;
 use crate::parse::integrator::{IntegratorParams, Parameter};
+use crate::sampling::rng::hash3;
 use crate::sampling::{Cdf, Rng, Stratum};
 use crate::scene::Scene;
 use crate::scene::accel::OccluderHint;
@@ -54,7 +56,7 @@ use crate::shading::light::LightSelect;
 use crate::shading::lighting::Shading;
 use crate::shading::{Spectrum, luminance};
 
-use super::{Application, CachePlan, Neighbour, PerSample, Study};
+use super::{Application, CachePlan, LeaveOneOut, Neighbour, PerSample, Study};
 use distribution::Quantised;
 use lobe::LobeTree;
 use mixture::{LETTERS, LOBE, Mis, Mixture, TECHNIQUES};
@@ -356,6 +358,7 @@ impl Application for ImportanceCache {
         };
         CachePlan {
             dgs_geometry: false,
+            refine_misses: false,
             shade_by_reference,
             follow_specular: true,
             shows_environment: true,
@@ -457,6 +460,40 @@ impl Application for ImportanceCache {
             l += compensation::clamp_loss(cx, &x, self.compensate, self.max_depth, &start, rays);
         }
         l.to_array()
+    }
+
+    /// Shading is unbiased, so the neighbours do not miss the cache's light but sample it with noise: the
+    /// variance of a pixel's value at the site drawing from their distributions, and from the cache's own,
+    /// with the cache's F as the light there ([`leave_one_out`]; luminance in every channel).
+    fn predict(
+        &self,
+        cx: &Lit<'_>,
+        at: &ShadingPoint,
+        own: &ImportanceRecord,
+        near: &[Neighbour<'_, ImportanceRecord>],
+        samples: u32,
+    ) -> Option<LeaveOneOut> {
+        if near.is_empty() {
+            return None;
+        }
+        let Some(f) = &own.dists[0] else { return Some(LeaveOneOut::values([0.0; 3], [0.0; 3])) };
+        let (n, samples) = (cx.vpls.len(), samples.max(1));
+        let others: Vec<_> = near.iter().map(|c| &c.record.dists).collect();
+        let s = leave_one_out::sampled(f, others.iter().copied(), self.techniques, n);
+        let variance = |dists: &[&[Option<Quantised>; 3]]| {
+            if self.stratify {
+                let key = hash3(at.p.x.to_bits() as u64, at.p.y.to_bits() as u64, at.p.z.to_bits() as u64);
+                leave_one_out::pixel_variance(key, f, dists, self.techniques, n, self.mis, samples)
+            } else {
+                leave_one_out::sampled(f, dists.iter().copied(), self.techniques, n).variance / samples as f32
+            }
+        };
+        Some(LeaveOneOut {
+            from_others: [s.expected; 3],
+            alone: [s.total; 3],
+            variance: variance(&others),
+            own_variance: variance(&[&own.dists]),
+        })
     }
 
     fn reference(

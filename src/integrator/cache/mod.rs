@@ -73,6 +73,7 @@ fn render_pass<A: Application>(
     if !plan.dgs_geometry {
         cs.params.dgs.geometry = false;
     }
+    cs.params.refine_misses = plan.refine_misses;
     let without_caches = plan.shade_by_reference;
     if without_caches.is_some() {
         cs.placement = Placement::Reference;

@@ -66,6 +66,8 @@ struct Store<'a, 's, A: Application> {
     app: &'a A,
     g: &'a GBuffer,
     seed: u64,
+    /// Sub-pixel samples per pixel (what a pixel's variance in [`Application::predict`] is over).
+    subpixels: u32,
     sites: Vec<PixelId>,
     records: Vec<A::Record>,
     eval_secs: f64,
@@ -92,6 +94,7 @@ impl<A: Application> CacheOracle for Store<'_, '_, A> {
 
     fn predict_many(&mut self, asks: &[(CacheId, Vec<(CacheId, f32)>)]) -> Vec<Option<Prediction>> {
         let (cx, app, g, records, sites) = (self.cx, self.app, self.g, &self.records, &self.sites);
+        let subpixels = self.subpixels;
         let neighbour = |c: CacheId, weight: f32| {
             let sp = g.get(sites[c as usize])?;
             Some(Neighbour { record: &records[c as usize], p: sp.p, n: sp.n, weight })
@@ -100,9 +103,13 @@ impl<A: Application> CacheOracle for Store<'_, '_, A> {
             .map(|(c, others)| {
                 let at = g.get(sites[*c as usize])?;
                 let near: Vec<_> = others.iter().filter_map(|&(o, w)| neighbour(o, w)).collect();
-                let (from_others, alone) = app.predict(cx, at, &records[*c as usize], &near)?;
-                let sq_err = (0..3).map(|k| (from_others[k] - alone[k]).powi(2)).sum::<f32>() / 3.0;
-                Some(Prediction { sq_err, value: alone.iter().sum::<f32>() / 3.0 })
+                let p = app.predict(cx, at, &records[*c as usize], &near, subpixels)?;
+                // A pixel's squared error: the bias² and its variance, less the variance it keeps with the
+                // cache itself (the floor).
+                let bias2 = (0..3).map(|k| (p.from_others[k] - p.alone[k]).powi(2)).sum::<f32>() / 3.0;
+                let floor = p.own_variance.min(p.variance);
+                let sq_err = bias2 + p.variance - floor;
+                Some(Prediction { sq_err, floor, value: p.alone.iter().sum::<f32>() / 3.0 })
             })
             .collect()
     }
@@ -188,6 +195,7 @@ pub fn render_cached<A: Application>(
         app,
         g: &g,
         seed: s.seed,
+        subpixels: s.subpixels.max(1),
         sites: Vec::new(),
         records: Vec::new(),
         eval_secs: 0.0,
