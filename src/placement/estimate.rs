@@ -33,12 +33,13 @@ use crate::gbuffer::GBuffer;
 
 /// The ratio of a pixel's squared error to the leave-one-out squared error of the caches it blends,
 /// measured on scenes outside the stability map (Veach's MIS scene and the shipped room and spheres, cache
-/// AO at 160×90, 64–4000 caches: the achieved relative RMSE was 0.669–0.966 of the estimate made with 1,
-/// geometric mean 0.765, whose square this is; experiments/results/refine-target/calibration.csv). Scaling
-/// each cache's miss by the distance of a pixel to the caches it blends over the distance of the cache to
-/// its own neighbours, to the first or the second power, spread the ratio wider over all seven scenes
-/// (0.557–1.515 and 0.319–1.434, against 0.669–1.251 without) and was left out.
-pub const KAPPA: f32 = 0.6;
+/// AO at 160×90, 64–4000 caches: the achieved relative RMSE was 0.636–1.632 of the estimate made with 1,
+/// geometric mean 0.818, whose square this is; the stability map's four scenes, not used to choose it, gave
+/// 0.830; experiments/results/refine-target/calibration.csv, made with the map of 2026-11-28). The map of
+/// 2026-11-27 gave 0.765 and 0.6 (`calibration-2026-11-27.csv` there). Scaling each cache's miss by the
+/// distance of a pixel to the caches it blends over the distance of the cache to its own neighbours, to the
+/// first or the second power, spread the ratio wider over all seven scenes and was left out (that file).
+pub const KAPPA: f32 = 0.67;
 
 /// The estimate is made on every `STRIDE`-th pixel in x and y.
 const STRIDE: usize = 2;
