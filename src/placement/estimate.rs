@@ -6,16 +6,17 @@
 //! blends at its site ([`CacheOracle::predict_many`]); the squared miss is that cache's local error. Where shading
 //! draws (importance caching), the miss is the variance of a pixel's samples drawn from the neighbours, split into what
 //! more caches can remove and the floor the pixel keeps with the cache itself ([`super::Prediction`]): refine's map
-//! follows the first, the estimate counts both. A pixel's error is the weighted mean of the local errors of the caches
-//! it blends (the weights of ALGORITHMS.md §5), scaled by [`KAPPA`], and its value the weighted mean of their own
-//! values; the estimate is sqrt(mean error²) / mean value over the image. A cache's miss is measured one cache spacing
-//! from its neighbours, where a pixel sits a fraction of a spacing from its caches: [`KAPPA`] is the ratio, measured
-//! (experiments/results/refine-target/).
+//! follows the first, the estimate counts both. A pixel's squared error is [`KAPPA`] times the weighted mean of the
+//! misses of the caches it blends (the weights of ALGORITHMS.md §5) plus the weighted mean of their floors, and its
+//! value the weighted mean of their own values; the estimate is sqrt(mean squared error) / mean value over the image. A
+//! cache's miss is measured one cache spacing from its neighbours, where a pixel sits a fraction of a spacing from its
+//! caches: [`KAPPA`] is the ratio, measured (experiments/results/refine-target/); a floor is a pixel's own and is not
+//! scaled.
 //!
 //! One refinement: a cache a pixel blends across a crease (its normal beyond the §5 normal filter of the
 //! pixel's) counts with the mean miss of the caches that were themselves predicted across a crease (most of
 //! their neighbours' weight beyond the filter), not with its own. It was meant for surfaces with no cache
-//! of their own at low density; measured, it moved none of calibration.csv's 28 estimates beyond the four
+//! of their own at low density; measured, it moved none of calibration-2026-11-27.csv's 28 estimates beyond the four
 //! decimals printed (its columns `power0` and `estimate_committed`), so the estimate behaves as the model
 //! above. It is in every committed result of refine-target; removing it is left for a change that re-runs
 //! them.

@@ -153,8 +153,8 @@ pub trait CacheOracle {
 /// it with the cache itself, and the cache's own value.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Prediction {
-    /// (Value from the others − value from the cache alone)², plus, where shading draws, the pixel's variance
-    /// from the others over its variance from the cache alone.
+    /// (Value from the others − value from the cache alone)², plus, where shading draws, what the pixel's
+    /// variance from the others exceeds its variance from the cache alone by.
     pub sq_err: f32,
     /// The pixel's variance from the cache alone (0 where shading draws nothing): the error's floor.
     pub floor: f32,

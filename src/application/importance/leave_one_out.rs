@@ -66,21 +66,9 @@ pub(super) fn sampled<'a>(
         |t: usize| near.clone().filter_map(move |d| d[t].as_ref().or(if t == 2 { d[1].as_ref() } else { None }));
     let counts: [usize; 3] = std::array::from_fn(|t| stored(t).count());
     // n_t of the techniques that can draw: F, U and B where a neighbour has the distribution, C always.
-    let n: [f64; 4] = std::array::from_fn(|t| match t {
-        CONSERVATIVE => {
-            if vpls > 0 {
-                draws[t] as f64
-            } else {
-                0.0
-            }
-        }
-        _ => {
-            if counts[t] > 0 {
-                draws[t] as f64
-            } else {
-                0.0
-            }
-        }
+    let n: [f64; 4] = std::array::from_fn(|t| {
+        let can = if t == CONSERVATIVE { vpls > 0 } else { counts[t] > 0 };
+        if can { draws[t] as f64 } else { 0.0 }
     });
     let total = own.value_sum() as f64;
     let (mut s, mut mu, mut lost) = (0f64, [0f64; 4], 0f64);

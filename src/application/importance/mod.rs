@@ -480,9 +480,9 @@ impl Application for ImportanceCache {
         let (n, samples) = (cx.vpls.len(), samples.max(1));
         let others: Vec<_> = near.iter().map(|c| &c.record.dists).collect();
         let s = leave_one_out::sampled(f, others.iter().copied(), self.techniques, n);
+        let key = hash3(at.p.x.to_bits() as u64, at.p.y.to_bits() as u64, at.p.z.to_bits() as u64);
         let variance = |dists: &[&[Option<Quantised>; 3]]| {
             if self.stratify {
-                let key = hash3(at.p.x.to_bits() as u64, at.p.y.to_bits() as u64, at.p.z.to_bits() as u64);
                 leave_one_out::pixel_variance(key, f, dists, self.techniques, n, self.mis, samples)
             } else {
                 leave_one_out::sampled(f, dists.iter().copied(), self.techniques, n).variance / samples as f32
