@@ -115,8 +115,12 @@ pub struct IrradianceRecord {
 #[derive(Clone, Debug)]
 pub struct IrradianceCache {
     dirs: Vec<Vec3A>,
+    /// The grid's side n (`dirs` holds n² directions, row by row).
+    side: usize,
     /// π / Σ_k cos θ_k: turns Σ_k L_k cos θ_k into E.
     norm: f32,
+    /// Σ_k cos² θ_k, for the variance of E from the variance of each L_k.
+    cos2_sum: f32,
     /// Vertices of a gathering path that sample a light.
     pub max_depth: u32,
     /// What the image holds.
@@ -143,6 +147,7 @@ impl IrradianceCache {
             .map(|k| equal_area_hemisphere([((k % n) as f32 + 0.5) / n as f32, ((k / n) as f32 + 0.5) / n as f32]))
             .collect::<Vec<Vec3A>>();
         let cos_sum: f32 = dirs.iter().map(|d| d.z).sum();
+        let cos2_sum: f32 = dirs.iter().map(|d| d.z * d.z).sum();
         let norm = if cos_sum > 0.0 { std::f32::consts::PI / cos_sum } else { 0.0 };
         let mut rng = Rng::new(0x7268_6f5f_6864);
         let rho_u = (0..RHO_SIDE * RHO_SIDE)
@@ -152,7 +157,16 @@ impl IrradianceCache {
             })
             .map(|u| u.map(|v| v.min(1.0 - f32::EPSILON / 2.0)))
             .collect();
-        IrradianceCache { dirs, norm, max_depth, output, reject_in_front: REJECT_IN_FRONT.default(), rho_u }
+        IrradianceCache {
+            dirs,
+            side: n,
+            norm,
+            cos2_sum,
+            max_depth,
+            output,
+            reject_in_front: REJECT_IN_FRONT.default(),
+            rho_u,
+        }
     }
 
     /// E at `at` by the n² gathering paths; the luminance of each direction's radiance goes to
@@ -256,6 +270,36 @@ impl IrradianceCache {
             }
         }
         l
+    }
+
+    /// A record's luminance of E and that luminance's variance over its gathering (the noise of its n² single
+    /// paths), read from the spread of its directions' radiance: half the mean squared difference of the
+    /// luminance along grid neighbours (adjacent cells of the equal-area square, adjacent directions) is
+    /// each direction's variance, on the assumption that the incident radiance itself changes little from one
+    /// cell to the next (where it does, the variance reads high). `None` once the per-direction radiance
+    /// has gone (after placement).
+    fn gather_noise(&self, record: &IrradianceRecord) -> Option<(f32, f32)> {
+        let (n, r) = (self.side, &record.radiance);
+        if n < 2 || r.len() != n * n {
+            return None;
+        }
+        let (mut d2, mut pairs) = (0f64, 0usize);
+        for y in 0..n {
+            for x in 0..n {
+                let k = y * n + x;
+                if x + 1 < n {
+                    d2 += ((r[k] - r[k + 1]) as f64).powi(2);
+                    pairs += 1;
+                }
+                if y + 1 < n {
+                    d2 += ((r[k] - r[k + n]) as f64).powi(2);
+                    pairs += 1;
+                }
+            }
+        }
+        let per_direction = d2 / (2 * pairs) as f64;
+        let variance = (self.norm as f64).powi(2) * per_direction * self.cos2_sum as f64;
+        Some((luminance(Spectrum::from_array(record.e)), variance as f32))
     }
 
     /// ρ_hd(ω_o)/π at a sample: the factor that turns irradiance into reflected radiance.
@@ -453,19 +497,44 @@ impl Application for IrradianceCache {
         (self.reflectance(cx, s) * e / wsum).to_array()
     }
 
-    /// Shading draws nothing: the blend of the others against the cache alone, reflectance included.
+    /// Shading draws nothing: the blend of the others against the cache alone, reflectance included. The
+    /// records are noisy, each E a sum of n² single paths, and so is the reference (the same gathering at
+    /// each sub-pixel sample): their variances ([`IrradianceCache::gather_noise`], carried to the reflected
+    /// value as the same relative variance) say what part of the miss is the records' noise (the cache's
+    /// own and the blend's) and what a pixel keeps: its blend's noise and the reference's.
     fn predict(
         &self,
         cx: &Lit<'_>,
         at: &ShadingPoint,
         own: &IrradianceRecord,
         near: &[Neighbour<'_, IrradianceRecord>],
-        _: u32,
+        samples: u32,
     ) -> Option<LeaveOneOut> {
+        if near.is_empty() {
+            return None;
+        }
         let (mut rng, stratum, mut rays) = (Rng::new(0), Stratum::new(0, 0, 0, 1), RayCounters::default());
         let alone = [Neighbour { record: own, p: at.p, n: at.n, weight: 1.0 }];
-        let own = self.shade(cx, at, &alone, &mut rng, stratum, &mut rays);
-        (!near.is_empty()).then(|| LeaveOneOut::values(self.shade(cx, at, near, &mut rng, stratum, &mut rays), own))
+        let own_value = self.shade(cx, at, &alone, &mut rng, stratum, &mut rays);
+        let from_others = self.shade(cx, at, near, &mut rng, stratum, &mut rays);
+        let mut p = LeaveOneOut::values(from_others, own_value);
+        let Some((e_own, var_own)) = self.gather_noise(own) else { return Some(p) };
+        // The caches shading blends: those not in front of the site, or all of them if every one is.
+        let kept = |all: bool| near.iter().filter(move |c| all || !self.reject_in_front || !in_front(at, c.p, c.n));
+        let all = kept(false).map(|c| c.weight).sum::<f32>() <= 0.0;
+        let (mut sw_e, mut sw2_var) = (0f64, 0f64);
+        for c in kept(all) {
+            let (e, var) = self.gather_noise(c.record).unwrap_or((luminance(Spectrum::from_array(c.record.e)), 0.0));
+            sw_e += (c.weight * e) as f64;
+            sw2_var += ((c.weight * c.weight) as f64) * var as f64;
+        }
+        let relative = |var: f64, e: f64| if e > 0.0 { (var / (e * e)) as f32 } else { 0.0 };
+        let square_mean = |v: [f32; 3]| v.iter().map(|x| x * x).sum::<f32>() / 3.0;
+        let own_noise = relative(var_own as f64, e_own as f64) * square_mean(own_value);
+        let blend_noise = relative(sw2_var, sw_e) * square_mean(from_others);
+        p.records_noise = own_noise + blend_noise;
+        p.kept_noise = blend_noise + own_noise / samples.max(1) as f32;
+        Some(p)
     }
 
     fn reference(&self, cx: &Lit<'_>, s: &ShadingPoint, rng: &mut Rng, _: Stratum, rays: &mut RayCounters) -> [f32; 3] {
@@ -503,6 +572,45 @@ mod tests {
             let plain = app.dirs.iter().map(|d| d.z).sum::<f32>() * 2.0 * std::f32::consts::PI / (n * n) as f32;
             assert!(n < 64 || (plain / e - 1.0).abs() < 1e-3, "n = {n}: {plain}");
         }
+    }
+
+    /// A record gathered from radiance `field(k)` plus independent noise of standard deviation `sd`.
+    fn noisy_record(app: &IrradianceCache, field: impl Fn(usize) -> f32, sd: f32, rng: &mut Rng) -> IrradianceRecord {
+        let radiance: Box<[f32]> = (0..app.dirs.len())
+            .map(|k| {
+                // The sum of 12 uniforms less 6: unit variance, near normal.
+                let g = (0..12).map(|_| rng.uniform()).sum::<f32>() - 6.0;
+                field(k) + sd * g
+            })
+            .collect();
+        let e = app.norm * app.dirs.iter().zip(radiance.iter()).map(|(d, l)| d.z * l).sum::<f32>();
+        IrradianceRecord { e: [e; 3], radiance }
+    }
+
+    #[test]
+    fn gathering_noise_reads_the_variance_of_e_the_paths_make() {
+        let app = IrradianceCache::new(16, 3, Output::Indirect);
+        let mut rng = Rng::new(11);
+        // Constant radiance 2 with noise 0.5 per direction: E's true variance is norm² · 0.25 · Σ cos².
+        let truth = app.norm.powi(2) * 0.25 * app.cos2_sum;
+        let runs = 400;
+        let (mut es, mut read) = (Vec::new(), 0f64);
+        for _ in 0..runs {
+            let r = noisy_record(&app, |_| 2.0, 0.5, &mut rng);
+            let (e, var) = app.gather_noise(&r).unwrap();
+            es.push(e as f64);
+            read += var as f64 / runs as f64;
+        }
+        let mean = es.iter().sum::<f64>() / runs as f64;
+        let spread = es.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / (runs - 1) as f64;
+        assert!((read / truth as f64 - 1.0).abs() < 0.03, "read {read}, truth {truth}");
+        assert!((spread / truth as f64 - 1.0).abs() < 0.2, "spread over runs {spread}, truth {truth}");
+        // Radiance that varies smoothly over the grid and carries no noise reads as nearly noiseless.
+        let smooth = noisy_record(&app, |k| 1.0 + (k % 16) as f32 / 16.0 + (k / 16) as f32 / 32.0, 0.0, &mut rng);
+        let (_, var) = app.gather_noise(&smooth).unwrap();
+        assert!(var < truth / 20.0, "smooth field read {var} against {truth}");
+        // Without its per-direction radiance (after placement) a record's noise is unknown.
+        assert_eq!(app.gather_noise(&IrradianceRecord { e: [1.0; 3], radiance: Box::new([]) }), None);
     }
 
     #[test]

@@ -77,12 +77,21 @@ pub struct LeaveOneOut {
     pub variance: f32,
     /// The same from the cache alone: the noise a pixel there keeps however many caches are added.
     pub own_variance: f32,
+    /// The part of the expected squared difference of the two values (the colour channels' mean) that the
+    /// records' own estimation noise makes (their gathering), not their placement: 0 where records are exact
+    /// or their noise is not measured.
+    pub records_noise: f32,
+    /// The noise a pixel's error against the per-sample reference keeps there whatever the placement, beyond
+    /// shading's own draws (the variances above): the records' noise its blend carries and the reference's
+    /// own noise (the mean of its sub-pixel samples about its expectation), the colour channels' mean; 0
+    /// where both are exact or not measured.
+    pub kept_noise: f32,
 }
 
 impl LeaveOneOut {
     /// A prediction of an application whose shading draws nothing: the two values, no variance.
     pub fn values(from_others: [f32; 3], alone: [f32; 3]) -> Self {
-        LeaveOneOut { from_others, alone, variance: 0.0, own_variance: 0.0 }
+        LeaveOneOut { from_others, alone, variance: 0.0, own_variance: 0.0, records_noise: 0.0, kept_noise: 0.0 }
     }
 }
 

@@ -13,6 +13,15 @@
 //! caches: [`KAPPA`] is the ratio, measured (experiments/results/refine-target/); a floor is a pixel's own and is not
 //! scaled.
 //!
+//! Where the records are themselves noisy estimates (irradiance caching's gathering), part of each miss is
+//! their noise, the cache's own and its neighbours' blend's, and the per-sample reference is noisy too. The
+//! application says how much ([`super::Prediction`]'s `noise` and `floor`): the estimate counts the misses less
+//! that noise (KAPPA scales what placement can remove), and the blend's and the reference's noise as floors.
+//! Refine's map keeps the whole miss: without the noise the map placed irradiance caching's caches worse on
+//! all four of the stability map's irradiance cells at 160×90 (0.931–1.041 of VGC+DGS's RMSE against
+//! 0.922–1.033 with it, 8 seeds; experiments/notes/refine.md): where a record is noisy, more caches there
+//! average its noise away in the pixels that blend it.
+//!
 //! One refinement: a cache a pixel blends across a crease (its normal beyond the §5 normal filter of the
 //! pixel's) counts with the mean miss of the caches that were themselves predicted across a crease (most of
 //! their neighbours' weight beyond the filter), not with its own. It was meant for surfaces with no cache
@@ -62,11 +71,11 @@ pub fn relative_rmse(
 /// Every cache's leave-one-out miss and value, for one set of caches: what both the estimate and refine's
 /// map (the local error each pixel inherits from the caches it blends) are made of.
 pub(super) struct Misses {
-    /// Per cache: its squared miss, the floor of its error and its own value ([`super::Prediction`];
-    /// `None`: not predicted).
-    local: Vec<Option<(f32, f32, f32)>>,
-    /// The mean miss of the caches predicted across a crease (module doc), if any were.
-    crease: Option<f32>,
+    /// Per cache: its squared miss, the part of it the records' noise makes, the floor of its error and its
+    /// own value ([`super::Prediction`]; `None`: not predicted).
+    local: Vec<Option<[f32; 4]>>,
+    /// The mean miss and mean records' noise of the caches predicted across a crease (module doc), if any were.
+    crease: Option<[f32; 2]>,
     /// The §5 normal filter's cosine.
     cos_max: f32,
 }
@@ -108,35 +117,37 @@ impl Misses {
         let across = |n: Vec3A, w: &[(u32, f32)]| -> f32 {
             w.iter().filter(|&&(id, _)| points[id as usize].1.dot(n) < cos_max).map(|&(_, wt)| wt).sum()
         };
-        let mut local: Vec<Option<(f32, f32, f32)>> = vec![None; points.len()];
-        let (mut crease_sum, mut crease_n) = (0f64, 0usize);
+        let mut local: Vec<Option<[f32; 4]>> = vec![None; points.len()];
+        let (mut crease_sum, mut crease_noise, mut crease_n) = (0f64, 0f64, 0usize);
         for ((c, w), a) in asks.iter().zip(answers) {
-            let a = a.filter(|a| a.sq_err.is_finite() && a.floor.is_finite() && a.value.is_finite());
+            let a = a.map(|a| [a.sq_err, a.noise, a.floor, a.value]).filter(|a| a.iter().all(|v| v.is_finite()));
             if let Some(a) = a
                 && across(points[*c as usize].1, w) > 0.5
             {
-                crease_sum += a.sq_err as f64;
+                crease_sum += a[0] as f64;
+                crease_noise += a[1] as f64;
                 crease_n += 1;
             }
-            local[*c as usize] = a.map(|a| (a.sq_err, a.floor, a.value));
+            local[*c as usize] = a;
         }
         if local.iter().all(Option::is_none) {
             return None;
         }
-        let crease = if crease_n > 0 { Some((crease_sum / crease_n as f64) as f32) } else { None };
+        let mean = |sum: f64| (sum / crease_n as f64) as f32;
+        let crease = (crease_n > 0).then(|| [mean(crease_sum), mean(crease_noise)]);
         Some(Misses { local, crease, cos_max })
     }
 
-    /// At a usable pixel: the weighted means over the caches it blends of their squared misses (a cache
-    /// blended across a crease counts with the crease caches' mean miss), of their floors and of their
-    /// values; `None` where it blends no predicted cache.
+    /// At a usable pixel: the weighted means over the caches it blends of their squared misses and the
+    /// records' noise in them (a cache blended across a crease counts with the crease caches' means), of
+    /// their floors and of their values; `None` where it blends no predicted cache.
     fn at_pixel(
         &self,
         points: &[(Vec3A, Vec3A)],
         index: &CacheIndex,
         sp: &crate::gbuffer::ShadingPoint,
         scratch: &mut (Vec<Neighbour>, Vec<(u32, f32)>),
-    ) -> Option<(f64, f64, f64)> {
+    ) -> Option<[f64; 4]> {
         let normal = usable_normal(sp)?;
         let (near, w) = scratch;
         index.select(sp.p, normal, near);
@@ -151,21 +162,21 @@ impl Misses {
         normal: Vec3A,
         near: &[Neighbour],
         w: &mut Vec<(u32, f32)>,
-    ) -> Option<(f64, f64, f64)> {
+    ) -> Option<[f64; 4]> {
         index.interpolate_weights(near, w);
-        let (mut se, mut sf, mut sv, mut sw) = (0f64, 0f64, 0f64, 0f64);
+        let (mut sums, mut sw) = ([0f64; 4], 0f64);
         for &(id, wt) in w.iter() {
-            if let Some((sq_err, floor, value)) = self.local[id as usize] {
+            if let Some([sq_err, noise, floor, value]) = self.local[id as usize] {
                 // A cache blended across a crease misses as the crease caches did, not as it did.
                 let crossed = points[id as usize].1.dot(normal) < self.cos_max;
-                let sq_err = if crossed { self.crease.unwrap_or(sq_err) } else { sq_err };
-                se += wt as f64 * sq_err as f64;
-                sf += wt as f64 * floor as f64;
-                sv += wt as f64 * value as f64;
+                let [sq_err, noise] = if crossed { self.crease.unwrap_or([sq_err, noise]) } else { [sq_err, noise] };
+                for (s, v) in sums.iter_mut().zip([sq_err, noise, floor, value]) {
+                    *s += wt as f64 * v as f64;
+                }
                 sw += wt as f64;
             }
         }
-        (sw > 0.0).then(|| (se / sw, sf / sw, sv / sw))
+        (sw > 0.0).then(|| sums.map(|s| s / sw))
     }
 
     /// The estimated relative RMSE (module doc) over every `STRIDE`-th pixel in x and y.
@@ -186,8 +197,8 @@ impl Misses {
                 for x in (0..g.width).step_by(STRIDE) {
                     n += 1;
                     let Some(sp) = g.get((y * g.width + x) as u32) else { continue };
-                    if let Some((e, floor, val)) = self.at_pixel(points, index, sp, &mut scratch) {
-                        e2 += e;
+                    if let Some([e, noise, floor, val]) = self.at_pixel(points, index, sp, &mut scratch) {
+                        e2 += e - noise;
                         f2 += floor;
                         v += val;
                     }
@@ -198,8 +209,9 @@ impl Misses {
         let (e2, f2, v, n) =
             rows.iter().fold((0f64, 0f64, 0f64, 0usize), |(a, b, c, d), r| (a + r.0, b + r.1, c + r.2, d + r.3));
         let mean = v / n as f64 + added_mean as f64;
-        // KAPPA scales the misses, measured a cache spacing away; the floor is a pixel's own.
-        (mean > 0.0).then(|| (((KAPPA as f64 * e2 + f2) / n as f64).sqrt() / mean) as f32)
+        // KAPPA scales the misses, measured a cache spacing away; the floor is a pixel's own. The misses less
+        // the records' noise sum below 0 only by that noise's spread: then nothing is left to remove.
+        (mean > 0.0).then(|| (((KAPPA as f64 * e2.max(0.0) + f2) / n as f64).sqrt() / mean) as f32)
     }
 
     /// A pixel's weighted mean squared miss of the caches it blends, from its normal and §5 selection
@@ -210,7 +222,7 @@ impl Misses {
         points: &'a [(Vec3A, Vec3A)],
         index: &'a CacheIndex,
     ) -> impl Fn(Vec3A, &[Neighbour], &mut Vec<(u32, f32)>) -> f32 + Sync + 'a {
-        move |normal, near, w| self.blend(points, index, normal, near, w).map_or(0.0, |(e, _, _)| e as f32)
+        move |normal, near, w| self.blend(points, index, normal, near, w).map_or(0.0, |[e, ..]| e as f32)
     }
 }
 
@@ -295,6 +307,58 @@ mod tests {
     }
 
     #[test]
+    fn the_records_noise_leaves_the_estimates_misses_and_what_a_pixel_keeps_is_its_floor() {
+        // Noisy records (irradiance caching's gathering): each miss holds `noise` more, which the application
+        // reports, and every pixel keeps `kept` whatever the placement.
+        struct Noisy<'a>(ts::MaskOracle<'a>, f32, f32);
+        impl CacheOracle for Noisy<'_> {
+            fn len(&self) -> usize {
+                self.0.len()
+            }
+            fn site(&self, c: CacheId) -> crate::gbuffer::PixelId {
+                self.0.site(c)
+            }
+            fn diff(&self, a: CacheId, b: CacheId) -> f32 {
+                self.0.diff(a, b)
+            }
+            fn evaluate(&mut self, sites: &[crate::gbuffer::PixelId]) {
+                self.0.evaluate(sites)
+            }
+            fn predict_many(&mut self, asks: &[(CacheId, Vec<(CacheId, f32)>)]) -> Vec<Option<Prediction>> {
+                let (noise, kept) = (self.1, self.2);
+                let exact = self.0.predict_many(asks);
+                exact
+                    .into_iter()
+                    .map(|p| p.map(|p| Prediction { sq_err: p.sq_err + noise, noise, floor: p.floor + kept, ..p }))
+                    .collect()
+            }
+        }
+        let g = ts::plane(96, 64);
+        let p = PlacementParams::default();
+        let s1 = ImageUniform.place(&g, 200, &p, ts::SEED).unwrap();
+        let exact = relative_rmse(&g, &mut ts::MaskOracle::new(&g, &s1.sites), &p, 0.0).unwrap();
+        let estimate =
+            |noise, kept| relative_rmse(&g, &mut Noisy(ts::MaskOracle::new(&g, &s1.sites), noise, kept), &p, 0.0);
+        // The records' noise alone leaves the estimate as exact records give it.
+        let (noise, kept) = (0.05f32, 0.01f32);
+        let only_noise = estimate(noise, 0.0).unwrap();
+        assert!((only_noise / exact - 1.0).abs() < 1e-4, "{only_noise} against {exact}");
+        // What every pixel keeps adds to the squared estimate in proportion, unscaled by KAPPA.
+        let [one, four] = [kept, 4.0 * kept].map(|k| estimate(noise, k).unwrap().powi(2) - exact * exact);
+        assert!(one > 0.0 && (four / one - 4.0).abs() < 1e-3, "{one} {four}");
+        let mut noisy = Noisy(ts::MaskOracle::new(&g, &s1.sites), noise, kept);
+        // Refine's map keeps the whole miss, noise included.
+        let points = cache_points(&g, &noisy);
+        let index = cache_index(&g, &points, &p);
+        let misses = Misses::new(&g, &points, &index, &mut noisy).unwrap();
+        let mut scratch = Default::default();
+        let sp = g.points.iter().flatten().next().unwrap();
+        let [miss, with_noise, floor, _] = misses.at_pixel(&points, &index, sp, &mut scratch).unwrap();
+        assert!((with_noise - noise as f64).abs() < 1e-6 && (floor - kept as f64).abs() < 1e-6);
+        assert!(miss >= noise as f64 - 1e-6, "the map's miss {miss} lost the records' noise {noise}");
+    }
+
+    #[test]
     fn the_blended_misses_are_largest_along_the_step_the_caches_straddle() {
         // IM caches on the flat scene: the caches either side of the hidden step predict each other badly, so
         // the pixels that blend them carry the largest misses; far from it only the gentle ripple is missed.
@@ -325,7 +389,7 @@ mod tests {
             .map(|sp| {
                 sp.as_ref()
                     .and_then(|sp| misses.at_pixel(&points, &index, sp, &mut scratch))
-                    .map_or(0.0, |e| e.0 as f32)
+                    .map_or(0.0, |e| e[0] as f32)
             })
             .collect();
         assert_eq!(own, map);

@@ -156,7 +156,11 @@ pub struct Prediction {
     /// (Value from the others − value from the cache alone)², plus, where shading draws, what the pixel's
     /// variance from the others exceeds its variance from the cache alone by.
     pub sq_err: f32,
-    /// The pixel's variance from the cache alone (0 where shading draws nothing): the error's floor.
+    /// The part of `sq_err` the records' own noise makes (their gathering; 0 where records are exact): the
+    /// estimate takes it out of the miss, refine's map does not (estimate.rs says why).
+    pub noise: f32,
+    /// The pixel's variance from the cache alone (0 where shading draws nothing) and the per-sample
+    /// reference's own variance there (0 where it is exact): the error's floor.
     pub floor: f32,
     /// Mean over the colour channels of the value from the cache alone.
     pub value: f32,

@@ -183,7 +183,7 @@ impl CacheOracle for MaskOracle<'_> {
             .map(|(c, others)| {
                 let own = mask_value(&self.masks[*c as usize]);
                 let blend: f32 = others.iter().map(|&(o, w)| w * mask_value(&self.masks[o as usize])).sum();
-                Some(Prediction { sq_err: (blend - own).powi(2), floor: 0.0, value: own })
+                Some(Prediction { sq_err: (blend - own).powi(2), noise: 0.0, floor: 0.0, value: own })
             })
             .collect()
     }

@@ -493,6 +493,9 @@ impl Application for ImportanceCache {
             alone: [s.total; 3],
             variance: variance(&others),
             own_variance: variance(&[&own.dists]),
+            // The records hold F exactly and the reference is the exact VPL sum.
+            records_noise: 0.0,
+            kept_noise: 0.0,
         })
     }
 

@@ -104,12 +104,17 @@ impl<A: Application> CacheOracle for Store<'_, '_, A> {
                 let at = g.get(sites[*c as usize])?;
                 let near: Vec<_> = others.iter().filter_map(|&(o, w)| neighbour(o, w)).collect();
                 let p = app.predict(cx, at, &records[*c as usize], &near, subpixels)?;
-                // A pixel's squared error: the bias² and its variance, less the variance it keeps with the
-                // cache itself (the floor).
+                // A pixel's squared error: the squared difference and its variance, less the variance it
+                // keeps with the cache itself; that and the noise it keeps beyond shading's are the floor.
                 let bias2 = (0..3).map(|k| (p.from_others[k] - p.alone[k]).powi(2)).sum::<f32>() / 3.0;
                 let floor = p.own_variance.min(p.variance);
                 let sq_err = bias2 + p.variance - floor;
-                Some(Prediction { sq_err, floor, value: p.alone.iter().sum::<f32>() / 3.0 })
+                Some(Prediction {
+                    sq_err,
+                    noise: p.records_noise,
+                    floor: floor + p.kept_noise,
+                    value: p.alone.iter().sum::<f32>() / 3.0,
+                })
             })
             .collect()
     }
