@@ -254,6 +254,46 @@ mod tests {
         ((e2 / g.points.len() as f64).sqrt() / (v / g.points.len() as f64)) as f32
     }
 
+    /// One leave-one-out question: a cache and its neighbours with their weights.
+    type Ask = (CacheId, Vec<(CacheId, f32)>);
+
+    /// The mask oracle with its answers to the leave-one-out question made by `.1` (given the oracle, which
+    /// it may ask).
+    struct Answering<'a, F>(ts::MaskOracle<'a>, F);
+    impl<'a, F: FnMut(&[Ask], &mut ts::MaskOracle<'a>) -> Vec<Option<Prediction>>> CacheOracle for Answering<'a, F> {
+        fn len(&self) -> usize {
+            self.0.len()
+        }
+        fn site(&self, c: CacheId) -> crate::gbuffer::PixelId {
+            self.0.site(c)
+        }
+        fn diff(&self, a: CacheId, b: CacheId) -> f32 {
+            self.0.diff(a, b)
+        }
+        fn evaluate(&mut self, sites: &[crate::gbuffer::PixelId]) {
+            self.0.evaluate(sites)
+        }
+        fn predict_many(&mut self, asks: &[Ask]) -> Vec<Option<Prediction>> {
+            (self.1)(asks, &mut self.0)
+        }
+    }
+
+    /// Noisy records (irradiance caching's gathering): each miss holds `noise` more, which the application
+    /// reports, and every pixel keeps `kept` whatever the placement.
+    fn noisy<'a>(
+        oracle: ts::MaskOracle<'a>,
+        noise: f32,
+        kept: f32,
+    ) -> Answering<'a, impl FnMut(&[Ask], &mut ts::MaskOracle<'a>) -> Vec<Option<Prediction>>> {
+        Answering(oracle, move |asks: &[Ask], exact: &mut ts::MaskOracle<'a>| {
+            let exact = exact.predict_many(asks);
+            exact
+                .into_iter()
+                .map(|p| p.map(|p| Prediction { sq_err: p.sq_err + noise, noise, floor: p.floor + kept, ..p }))
+                .collect()
+        })
+    }
+
     #[test]
     fn the_estimate_follows_the_true_error_as_caches_are_added() {
         // A plane with a hidden step: the error sits along the step and falls as the caches get denser.
@@ -282,63 +322,24 @@ mod tests {
         let with_term = relative_rmse(&g, &mut oracle, &p, 10.0).unwrap();
         assert!(alone > 0.0 && with_term < alone / 5.0, "{alone} {with_term}");
         // An oracle whose application cannot answer the leave-one-out question: asked about one cache only.
-        struct Mute<'a>(ts::MaskOracle<'a>, usize);
-        impl CacheOracle for Mute<'_> {
-            fn len(&self) -> usize {
-                self.0.len()
-            }
-            fn site(&self, c: CacheId) -> crate::gbuffer::PixelId {
-                self.0.site(c)
-            }
-            fn diff(&self, a: CacheId, b: CacheId) -> f32 {
-                self.0.diff(a, b)
-            }
-            fn evaluate(&mut self, sites: &[crate::gbuffer::PixelId]) {
-                self.0.evaluate(sites)
-            }
-            fn predict_many(&mut self, asks: &[(CacheId, Vec<(CacheId, f32)>)]) -> Vec<Option<Prediction>> {
-                self.1 += asks.len();
-                vec![None; asks.len()]
-            }
-        }
-        let mut mute = Mute(oracle, 0);
+        let mut asked = 0;
+        let mut mute = Answering(oracle, |asks: &[Ask], _: &mut ts::MaskOracle<'_>| {
+            asked += asks.len();
+            vec![None; asks.len()]
+        });
         assert_eq!(relative_rmse(&g, &mut mute, &p, 0.0), None);
-        assert_eq!(mute.1, 1);
+        drop(mute);
+        assert_eq!(asked, 1);
     }
 
     #[test]
     fn the_records_noise_leaves_the_estimates_misses_and_what_a_pixel_keeps_is_its_floor() {
-        // Noisy records (irradiance caching's gathering): each miss holds `noise` more, which the application
-        // reports, and every pixel keeps `kept` whatever the placement.
-        struct Noisy<'a>(ts::MaskOracle<'a>, f32, f32);
-        impl CacheOracle for Noisy<'_> {
-            fn len(&self) -> usize {
-                self.0.len()
-            }
-            fn site(&self, c: CacheId) -> crate::gbuffer::PixelId {
-                self.0.site(c)
-            }
-            fn diff(&self, a: CacheId, b: CacheId) -> f32 {
-                self.0.diff(a, b)
-            }
-            fn evaluate(&mut self, sites: &[crate::gbuffer::PixelId]) {
-                self.0.evaluate(sites)
-            }
-            fn predict_many(&mut self, asks: &[(CacheId, Vec<(CacheId, f32)>)]) -> Vec<Option<Prediction>> {
-                let (noise, kept) = (self.1, self.2);
-                let exact = self.0.predict_many(asks);
-                exact
-                    .into_iter()
-                    .map(|p| p.map(|p| Prediction { sq_err: p.sq_err + noise, noise, floor: p.floor + kept, ..p }))
-                    .collect()
-            }
-        }
         let g = ts::plane(96, 64);
         let p = PlacementParams::default();
         let s1 = ImageUniform.place(&g, 200, &p, ts::SEED).unwrap();
         let exact = relative_rmse(&g, &mut ts::MaskOracle::new(&g, &s1.sites), &p, 0.0).unwrap();
         let estimate =
-            |noise, kept| relative_rmse(&g, &mut Noisy(ts::MaskOracle::new(&g, &s1.sites), noise, kept), &p, 0.0);
+            |noise, kept| relative_rmse(&g, &mut noisy(ts::MaskOracle::new(&g, &s1.sites), noise, kept), &p, 0.0);
         // The records' noise alone leaves the estimate as exact records give it.
         let (noise, kept) = (0.05f32, 0.01f32);
         let only_noise = estimate(noise, 0.0).unwrap();
@@ -346,11 +347,11 @@ mod tests {
         // What every pixel keeps adds to the squared estimate in proportion, unscaled by KAPPA.
         let [one, four] = [kept, 4.0 * kept].map(|k| estimate(noise, k).unwrap().powi(2) - exact * exact);
         assert!(one > 0.0 && (four / one - 4.0).abs() < 1e-3, "{one} {four}");
-        let mut noisy = Noisy(ts::MaskOracle::new(&g, &s1.sites), noise, kept);
         // Refine's map keeps the whole miss, noise included.
-        let points = cache_points(&g, &noisy);
+        let mut oracle = noisy(ts::MaskOracle::new(&g, &s1.sites), noise, kept);
+        let points = cache_points(&g, &oracle);
         let index = cache_index(&g, &points, &p);
-        let misses = Misses::new(&g, &points, &index, &mut noisy).unwrap();
+        let misses = Misses::new(&g, &points, &index, &mut oracle).unwrap();
         let mut scratch = Default::default();
         let sp = g.points.iter().flatten().next().unwrap();
         let [miss, with_noise, floor, _] = misses.at_pixel(&points, &index, sp, &mut scratch).unwrap();
