@@ -106,6 +106,9 @@ pub const REJECT_IN_FRONT: ParamDef<bool> = ParamDef::bool(
 pub struct IrradianceRecord {
     /// Indirect irradiance (RGB).
     pub e: [f32; 3],
+    /// The variance of E's luminance over the gathering (the noise of its n² single paths;
+    /// [`IrradianceCache::gather_noise`]), for refine's error estimate.
+    pub noise: f32,
     /// Luminance of the radiance arriving along each gathering direction (index k of §3.3); empty once
     /// placement is over.
     pub radiance: Box<[f32]>,
@@ -272,16 +275,15 @@ impl IrradianceCache {
         l
     }
 
-    /// A record's luminance of E and that luminance's variance over its gathering (the noise of its n² single
-    /// paths), read from the spread of its directions' radiance: half the mean squared difference of the
-    /// luminance along grid neighbours (adjacent cells of the equal-area square, adjacent directions) is
-    /// each direction's variance, on the assumption that the incident radiance itself changes little from one
-    /// cell to the next (where it does, the variance reads high). `None` once the per-direction radiance
-    /// has gone (after placement).
-    fn gather_noise(&self, record: &IrradianceRecord) -> Option<(f32, f32)> {
-        let (n, r) = (self.side, &record.radiance);
+    /// The variance of the luminance of E over its gathering (the noise of its n² single paths), read from
+    /// the luminance `r` of each direction's radiance: half the mean squared difference along grid neighbours
+    /// (adjacent cells of the equal-area square, adjacent directions) is each direction's variance, on the
+    /// assumption that the incident radiance itself changes little from one cell to the next (where it does,
+    /// the variance reads high). 0 for a grid of one direction, which has no neighbours.
+    fn gather_noise(&self, r: &[f32]) -> f32 {
+        let n = self.side;
         if n < 2 || r.len() != n * n {
-            return None;
+            return 0.0;
         }
         let (mut d2, mut pairs) = (0f64, 0usize);
         for y in 0..n {
@@ -298,8 +300,7 @@ impl IrradianceCache {
             }
         }
         let per_direction = d2 / (2 * pairs) as f64;
-        let variance = (self.norm as f64).powi(2) * per_direction * self.cos2_sum as f64;
-        Some((luminance(Spectrum::from_array(record.e)), variance as f32))
+        ((self.norm as f64).powi(2) * per_direction * self.cos2_sum as f64) as f32
     }
 
     /// ρ_hd(ω_o)/π at a sample: the factor that turns irradiance into reflected radiance.
@@ -458,7 +459,7 @@ impl Application for IrradianceCache {
     ) -> IrradianceRecord {
         let mut radiance = vec![0.0f32; self.dirs.len()].into_boxed_slice();
         let e = self.gather(cx, at, rng, rays, Some(&mut radiance));
-        IrradianceRecord { e: e.to_array(), radiance }
+        IrradianceRecord { e: e.to_array(), noise: self.gather_noise(&radiance), radiance }
     }
 
     fn diff(&self, a: &IrradianceRecord, b: &IrradianceRecord) -> f32 {
@@ -518,19 +519,18 @@ impl Application for IrradianceCache {
         let own_value = self.shade(cx, at, &alone, &mut rng, stratum, &mut rays);
         let from_others = self.shade(cx, at, near, &mut rng, stratum, &mut rays);
         let mut p = LeaveOneOut::values(from_others, own_value);
-        let Some((e_own, var_own)) = self.gather_noise(own) else { return Some(p) };
+        let e_of = |r: &IrradianceRecord| luminance(Spectrum::from_array(r.e));
         // The caches shading blends: those not in front of the site, or all of them if every one is.
         let kept = |all: bool| near.iter().filter(move |c| all || !self.reject_in_front || !in_front(at, c.p, c.n));
         let all = kept(false).map(|c| c.weight).sum::<f32>() <= 0.0;
         let (mut sw_e, mut sw2_var) = (0f64, 0f64);
         for c in kept(all) {
-            let (e, var) = self.gather_noise(c.record).unwrap_or((luminance(Spectrum::from_array(c.record.e)), 0.0));
-            sw_e += (c.weight * e) as f64;
-            sw2_var += ((c.weight * c.weight) as f64) * var as f64;
+            sw_e += (c.weight * e_of(c.record)) as f64;
+            sw2_var += ((c.weight * c.weight) as f64) * c.record.noise as f64;
         }
         let relative = |var: f64, e: f64| if e > 0.0 { (var / (e * e)) as f32 } else { 0.0 };
         let square_mean = |v: [f32; 3]| v.iter().map(|x| x * x).sum::<f32>() / 3.0;
-        let own_noise = relative(var_own as f64, e_own as f64) * square_mean(own_value);
+        let own_noise = relative(own.noise as f64, e_of(own) as f64) * square_mean(own_value);
         let blend_noise = relative(sw2_var, sw_e) * square_mean(from_others);
         p.records_noise = own_noise + blend_noise;
         p.kept_noise = blend_noise + own_noise / samples.max(1) as f32;
@@ -584,7 +584,7 @@ mod tests {
             })
             .collect();
         let e = app.norm * app.dirs.iter().zip(radiance.iter()).map(|(d, l)| d.z * l).sum::<f32>();
-        IrradianceRecord { e: [e; 3], radiance }
+        IrradianceRecord { e: [e; 3], noise: app.gather_noise(&radiance), radiance }
     }
 
     #[test]
@@ -597,9 +597,8 @@ mod tests {
         let (mut es, mut read) = (Vec::new(), 0f64);
         for _ in 0..runs {
             let r = noisy_record(&app, |_| 2.0, 0.5, &mut rng);
-            let (e, var) = app.gather_noise(&r).unwrap();
-            es.push(e as f64);
-            read += var as f64 / runs as f64;
+            es.push(r.e[0] as f64);
+            read += r.noise as f64 / runs as f64;
         }
         let mean = es.iter().sum::<f64>() / runs as f64;
         let spread = es.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / (runs - 1) as f64;
@@ -607,10 +606,10 @@ mod tests {
         assert!((spread / truth as f64 - 1.0).abs() < 0.2, "spread over runs {spread}, truth {truth}");
         // Radiance that varies smoothly over the grid and carries no noise reads as nearly noiseless.
         let smooth = noisy_record(&app, |k| 1.0 + (k % 16) as f32 / 16.0 + (k / 16) as f32 / 32.0, 0.0, &mut rng);
-        let (_, var) = app.gather_noise(&smooth).unwrap();
-        assert!(var < truth / 20.0, "smooth field read {var} against {truth}");
-        // Without its per-direction radiance (after placement) a record's noise is unknown.
-        assert_eq!(app.gather_noise(&IrradianceRecord { e: [1.0; 3], radiance: Box::new([]) }), None);
+        assert!(smooth.noise < truth / 20.0, "smooth field read {} against {truth}", smooth.noise);
+        // One direction has no neighbours to read a spread from.
+        let one = IrradianceCache::new(1, 3, Output::Indirect);
+        assert_eq!(noisy_record(&one, |_| 2.0, 0.5, &mut rng).noise, 0.0);
     }
 
     #[test]
