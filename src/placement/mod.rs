@@ -159,8 +159,9 @@ pub struct Prediction {
     /// The part of `sq_err` the records' own noise makes (their gathering; 0 where records are exact): the
     /// estimate takes it out of the miss, refine's map does not (estimate.rs says why).
     pub noise: f32,
-    /// The pixel's variance from the cache alone (0 where shading draws nothing) and the per-sample
-    /// reference's own variance there (0 where it is exact): the error's floor.
+    /// The pixel's variance from the cache alone (0 where shading draws nothing) and the noise it keeps
+    /// beyond shading's (its blend's records' and the per-sample reference's; 0 where they are exact): the
+    /// error's floor.
     pub floor: f32,
     /// Mean over the colour channels of the value from the cache alone.
     pub value: f32,
