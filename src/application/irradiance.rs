@@ -303,6 +303,11 @@ impl IrradianceCache {
         ((self.norm as f64).powi(2) * per_direction * self.cos2_sum as f64) as f32
     }
 
+    /// Whether shading at `s` blends cache `c` when not every cache is in front of it (see `in_front`).
+    fn blends(&self, s: &ShadingPoint, c: &Neighbour<'_, IrradianceRecord>) -> bool {
+        !self.reject_in_front || !in_front(s, c.p, c.n)
+    }
+
     /// ρ_hd(ω_o)/π at a sample: the factor that turns irradiance into reflected radiance.
     fn reflectance(&self, cx: &Lit<'_>, s: &ShadingPoint) -> Spectrum {
         let Some(bsdf) = s.interaction().and_then(|si| cx.shading.bsdf(&si)) else { return Spectrum::ZERO };
@@ -481,11 +486,9 @@ impl Application for IrradianceCache {
         _: &mut RayCounters,
     ) -> [f32; 3] {
         let blend = |all: bool| {
-            near.iter()
-                .filter(|c| all || !self.reject_in_front || !in_front(s, c.p, c.n))
-                .fold((Spectrum::ZERO, 0.0f32), |(e, w), c| {
-                    (e + c.weight * Spectrum::from_array(c.record.e), w + c.weight)
-                })
+            near.iter().filter(|c| all || self.blends(s, c)).fold((Spectrum::ZERO, 0.0f32), |(e, w), c| {
+                (e + c.weight * Spectrum::from_array(c.record.e), w + c.weight)
+            })
         };
         let (mut e, mut wsum) = blend(false);
         if wsum <= 0.0 {
@@ -521,7 +524,7 @@ impl Application for IrradianceCache {
         let mut p = LeaveOneOut::values(from_others, own_value);
         let e_of = |r: &IrradianceRecord| luminance(Spectrum::from_array(r.e));
         // The caches shading blends: those not in front of the site, or all of them if every one is.
-        let kept = |all: bool| near.iter().filter(move |c| all || !self.reject_in_front || !in_front(at, c.p, c.n));
+        let kept = |all: bool| near.iter().filter(move |c| all || self.blends(at, c));
         let all = kept(false).map(|c| c.weight).sum::<f32>() <= 0.0;
         let (mut sw_e, mut sw2_var) = (0f64, 0f64);
         for c in kept(all) {
