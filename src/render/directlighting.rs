@@ -149,8 +149,14 @@ impl<'a> DirectLighting<'a> {
         scratch: &mut Scratch,
         c: &mut RayCounters,
     ) -> Spectrum {
+        let flags = lobe | BxdfFlags::SPECULAR;
+        if x.bsdf.num_components(flags) == 0 {
+            // pbrt-v3 draws the sample and finds no lobe; the dimensions advance the same way.
+            s.skip2d();
+            return Spectrum::ZERO;
+        }
         let u = s.get2d();
-        let Some(bs) = x.bsdf.sample_f(x.wo, u, lobe | BxdfFlags::SPECULAR) else { return Spectrum::ZERO };
+        let Some(bs) = x.bsdf.sample_f(x.wo, u, flags) else { return Spectrum::ZERO };
         let cos = bs.wi.dot(x.bsdf.shading_normal()).abs();
         if bs.pdf <= 0.0 || bs.f == Spectrum::ZERO || cos == 0.0 {
             return Spectrum::ZERO;

@@ -9,6 +9,7 @@ use rayon::prelude::*;
 use crate::image::Image;
 use crate::scene::Scene;
 use crate::scene::film::PixelBounds;
+use crate::scene::ray::Ray;
 use crate::scene::sampler::SamplerSpec;
 
 use super::film::{Film, FilmTile, clamp_sample_luminance};
@@ -80,11 +81,19 @@ fn render_tile(
     let max_lum = scene.film.max_sample_luminance;
     for y in t.min[1]..t.max[1] {
         for x in t.min[0]..t.max[0] {
+            // Each sample's camera ray is made one sample ahead: its chain of divisions and square roots then
+            // overlaps the previous sample's shading instead of stalling the traversal that needs it. The
+            // stream is a function of (pixel, sample, dimension), so the values are the same in this order.
+            let mut next = camera_sample(scene, &mut samples, [x, y], 0);
             for i in 0..sampler.spp {
+                let (p_film, ray) = next;
+                if i + 1 < sampler.spp {
+                    next = camera_sample(scene, &mut samples, [x, y], i + 1);
+                }
+                // Back to this sample, past the camera's dimensions.
                 samples.start([x, y], i);
-                let u = samples.get2d();
-                let p_film = [x as f32 + u[0], y as f32 + u[1]];
-                let ray = scene.camera.generate_ray(p_film, samples.get2d());
+                samples.skip2d();
+                samples.skip2d();
                 let mut l = integrator.li(scene, ray, &mut samples, &mut scratch, &mut counters);
                 if !l.iter().all(|v| v.is_finite()) {
                     l = [0.0; 3];
@@ -94,6 +103,23 @@ fn render_tile(
         }
     }
     (tile, counters)
+}
+
+/// The film position and camera ray of sample `i` of `pixel`, leaving `samples` past the camera's two
+/// dimension pairs (film, then lens: the lens sample is drawn, or its dimensions skipped, whether or not the
+/// camera has a lens).
+#[inline]
+fn camera_sample(scene: &Scene, samples: &mut PixelSamples, pixel: [i32; 2], i: u32) -> ([f32; 2], Ray) {
+    samples.start(pixel, i);
+    let u = samples.get2d();
+    let p_film = [pixel[0] as f32 + u[0], pixel[1] as f32 + u[1]];
+    let u_lens = if scene.camera.uses_lens() {
+        samples.get2d()
+    } else {
+        samples.skip2d();
+        [0.5; 2]
+    };
+    (p_film, scene.camera.generate_ray(p_film, u_lens))
 }
 
 fn progress_bar(show: bool, n: u64) -> ProgressBar {

@@ -113,6 +113,7 @@ impl PixelSamples {
     }
 
     /// The next dimension: its key, scrambles and (when remembered) its slot in [`PixelSamples::dims`].
+    #[inline]
     fn next_dim(&mut self) -> (u64, [u32; 2], Option<usize>) {
         self.dim += 1;
         let d = (self.dim - 1) as usize;
@@ -120,6 +121,13 @@ impl PixelSamples {
             let dim = &self.dims[d];
             return (dim.key, dim.scramble, Some(d));
         }
+        self.next_dim_cold(d)
+    }
+
+    /// [`PixelSamples::next_dim`] for a dimension this pixel has not remembered: hashes its key.
+    #[cold]
+    #[inline(never)]
+    fn next_dim_cold(&mut self, d: usize) -> (u64, [u32; 2], Option<usize>) {
         let key = hash3(self.seed, self.pixel_key, self.dim);
         let scramble = [(key >> 32) as u32, mix64(key) as u32];
         // Dimensions are drawn in order, so an unknown one is the next to remember.
@@ -132,9 +140,30 @@ impl PixelSamples {
     }
 
     /// `permute(self.index, spp, perm_key)`, from remembered dimension `slot`'s row when it holds that
-    /// permutation (`blocks`: array blocks' order, else points'), tabulating the row on its first use.
+    /// permutation (`blocks`: array blocks' order, else points'), tabulating the row on its first use. The
+    /// permutation's key is [`perm_key`] of the dimension's `key`, computed only when the row cannot answer.
     #[inline]
-    fn permuted(&mut self, slot: Option<usize>, blocks: bool, perm_key: u32) -> u32 {
+    fn permuted(&mut self, slot: Option<usize>, blocks: bool, key: u64) -> u32 {
+        // The hot path, one load and a compare: the row is tabulated for this kind from this sample on.
+        if let Some(d) = slot {
+            let i = self.index;
+            if let (Row::Points(from), false) | (Row::Blocks(from), true) = (self.dims[d].row, blocks)
+                && i >= from
+                && i < self.spp
+            {
+                let at = d * self.spp as usize + i as usize;
+                if let Some(&v) = self.rows.get(at) {
+                    return v;
+                }
+            }
+        }
+        self.permuted_cold(slot, blocks, perm_key(key, blocks))
+    }
+
+    /// [`PixelSamples::permuted`] when the row does not hold the value: tabulates it, or computes one value.
+    #[cold]
+    #[inline(never)]
+    fn permuted_cold(&mut self, slot: Option<usize>, blocks: bool, perm_key: u32) -> u32 {
         let (spp, i) = (self.spp, self.index);
         let Some(d) = slot.filter(|_| spp <= TABLE_SPP && i < spp) else {
             return permute(i, spp, perm_key);
@@ -164,8 +193,24 @@ impl PixelSamples {
             SamplerKind::Random => self.rng.uniform2(),
             SamplerKind::Stratified => {
                 let (k, s, slot) = self.next_dim();
-                let i = self.permuted(slot, false, k as u32);
+                let i = self.permuted(slot, false, k);
                 sobol02(i, s)
+            }
+        }
+    }
+
+    /// Moves past the next two dimensions without computing their values: the stream afterwards is exactly
+    /// as after [`PixelSamples::get2d`] (for a caller that draws them only to keep the dimensions aligned,
+    /// like pbrt-v3's `SpecularReflect` at a surface without a specular lobe).
+    pub fn skip2d(&mut self) {
+        match self.kind {
+            SamplerKind::Random => {
+                self.rng.uniform2();
+            }
+            SamplerKind::Stratified => {
+                // Only the dimension count and the remembered keys advance; a tabulated row is a function of
+                // its key alone, so tabulating it later gives the same values.
+                self.next_dim();
             }
         }
     }
@@ -186,7 +231,7 @@ impl PixelSamples {
                 // block of a power-of-two size is itself a (0,2)-net.
                 let (k, s, slot) = self.next_dim();
                 let n = out.len() as u64;
-                let block = self.permuted(slot, true, mix64(k ^ ARRAY_BLOCKS) as u32) as u64;
+                let block = self.permuted(slot, true, k) as u64;
                 if n * self.spp as u64 <= u32::MAX as u64 {
                     let first = block * n;
                     out.iter_mut().enumerate().for_each(|(j, u)| *u = sobol02((first + j as u64) as u32, s));
@@ -199,6 +244,12 @@ impl PixelSamples {
             }
         }
     }
+}
+
+/// The key of the permutation a dimension with key `key` visits its points (`blocks`: its array blocks) in.
+#[inline]
+fn perm_key(key: u64, blocks: bool) -> u32 {
+    if blocks { mix64(key ^ ARRAY_BLOCKS) as u32 } else { key as u32 }
 }
 
 /// Reorders 2-D sample points so consecutive points are neighbours in the unit square (a counting sort into
@@ -315,6 +366,36 @@ mod tests {
             Some(n) => {
                 let block = permute(index, spp, mix64(k ^ ARRAY_BLOCKS) as u32);
                 (0..n as u32).map(|j| sobol02(block * n as u32 + j, s)).collect()
+            }
+        }
+    }
+
+    #[test]
+    fn skipping_two_dimensions_leaves_the_stream_where_drawing_them_does() {
+        for kind in [SamplerKind::Stratified, SamplerKind::Random] {
+            for skip in 0..6 {
+                let (mut drawn, mut skipped) = (PixelSamples::new(kind, 16, 5), PixelSamples::new(kind, 16, 5));
+                let mut out = [[0.0; 2]; 3];
+                for i in 0..16 {
+                    let (mut a, mut b) = (Vec::new(), Vec::new());
+                    drawn.start([3, 4], i);
+                    skipped.start([3, 4], i);
+                    for d in 0..8 {
+                        if d == skip {
+                            drawn.get2d();
+                            skipped.skip2d();
+                        } else if d % 3 == 2 {
+                            drawn.array2d(&mut out);
+                            a.extend(out);
+                            skipped.array2d(&mut out);
+                            b.extend(out);
+                        } else {
+                            a.push(drawn.get2d());
+                            b.push(skipped.get2d());
+                        }
+                    }
+                    assert_eq!(a, b, "{kind:?}, dimension pair {skip} skipped, sample {i}");
+                }
             }
         }
     }

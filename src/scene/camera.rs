@@ -149,6 +149,12 @@ impl Camera {
         Ray::new(self.world_from_camera.transform_point3a(o), d)
     }
 
+    /// Whether [`Camera::generate_ray`] reads its lens sample (a thin lens that is not a pinhole, and not the
+    /// environment projection, which has none).
+    pub fn uses_lens(&self) -> bool {
+        self.lens_radius > 0.0 && !matches!(self.projection, Projection::Environment)
+    }
+
     /// Moves a pinhole ray onto a thin lens, keeping the point at the focal distance fixed (pbrt-v3).
     fn thin_lens(&self, o: Vec3A, d: Vec3A, u: [f32; 2]) -> (Vec3A, Vec3A) {
         if self.lens_radius <= 0.0 {
