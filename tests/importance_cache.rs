@@ -519,9 +519,20 @@ fn stats_report_the_records_and_geometry_free_dgs() {
     assert!(kept > 3000.0 && kept < 4000.0, "{kept}");
     assert_eq!(c.settings["vpls"], 1000);
     assert_eq!(c.settings["distributions"], "fubcg");
-    // Eight draws per letter by default; the baselines draw as many as F, U, B and C together.
+    // Eight draws per letter by default; the baselines draw as many as F, U, B and C together; each cache
+    // may halve U's, B's and C's draws twice in favour of F.
     assert_eq!(c.settings["lightsamples"], 8);
     assert_eq!(c.settings["draws"], 32);
+    assert_eq!(c.settings["learnshares"], 2);
+    // A count after a letter repeats it: the same render as the letters spelled out.
+    let with = |d: &str, l: &str| {
+        let set = [("vpls", "1000"), ("caches", "30"), ("distributions", d), ("learnshares", l)];
+        render_with(&loaded, &set, 1, None).unwrap().image.pixels
+    };
+    assert_eq!(with("f2ubcg", "2"), with("ffubcg", "2"));
+    // The learnt shares move the draws, and without them the shares are those of `distributions`.
+    assert_ne!(with("fubcg", "0"), out.image.pixels);
+    assert_eq!(with("fubcg", "2"), out.image.pixels);
     // What the scene gave beside what was asked: every VPL here, from fewer light paths (a path leaves
     // several); making them is a stage of its own, inside the total.
     assert_eq!(c.stats.prepared["vpls_generated"], 1000);
@@ -554,9 +565,13 @@ fn bad_parameters_and_absurd_budgets_are_clear_errors() {
         ("vpls", "0", "between 1"),
         ("vpls", "1000000000000", "between 1"),
         ("distributions", "fx", "letters"),
-        ("distributions", "fffffffffffffffffu", "at most 16 times"),
-        // Each letter draws `lightsamples` (8) times: three f's would be 24 draws of F.
-        ("distributions", "fffu", "at most 16 times"),
+        ("distributions", "f2x", "letters"),
+        // Each letter draws `lightsamples` (8) times: 17 f's would be 136 draws of F, five g's 40 of G.
+        ("distributions", "fffffffffffffffffu", "at most 64 times"),
+        ("distributions", "f17u", "at most 64 times"),
+        ("distributions", "fubcg5", "g: 16"),
+        ("distributions", "f99999999999", "at most 64 times"),
+        ("learnshares", "4", "between 0 and 3"),
         ("lightsamples", "0", "between 1 and 16"),
         ("lightsamples", "17", "between 1 and 16"),
         ("distributions", "", "at least one"),

@@ -165,6 +165,9 @@ pub struct CachePlan {
     /// purely specular vertex its emission): the application's image is everything the camera sees, not
     /// only what reaches surfaces. Off where an added per-pixel term already shows it.
     pub shows_environment: bool,
+    /// Whether each record takes a lesson from its neighbours once placement is over
+    /// ([`Application::lesson`]).
+    pub learns: bool,
 }
 
 impl Default for CachePlan {
@@ -176,6 +179,7 @@ impl Default for CachePlan {
             added_per_pixel: None,
             follow_specular: false,
             shows_environment: false,
+            learns: false,
         }
     }
 }
@@ -304,6 +308,22 @@ pub trait Application: Sync + Sized {
     /// radius of the region the cache serves.
     fn finish_record(&self, cx: &Self::Prepared<'_>, record: &mut Self::Record, region: f32) {
         let _ = (cx, record, region);
+    }
+
+    /// Called once per record after every [`Application::finish_record`], where the plan asks for it
+    /// ([`CachePlan::learns`]), with the caches that shading at the record's own site would blend besides it
+    /// (the §5 selection there with the cache itself left out; weights 1 / Dist): a small number that
+    /// [`Application::keep_lesson`] stores in the record, of how shading near the cache should use its
+    /// neighbours (importance caching: how many of its draws go to F). It must depend on the records alone,
+    /// so that images stay deterministic.
+    fn lesson(&self, cx: &Self::Prepared<'_>, own: &Self::Record, near: &[Neighbour<'_, Self::Record>]) -> u8 {
+        let _ = (cx, own, near);
+        0
+    }
+
+    /// Stores what [`Application::lesson`] gave for `record`.
+    fn keep_lesson(&self, record: &mut Self::Record, lesson: u8) {
+        let _ = (record, lesson);
     }
 
     /// Shades one sample from its selected caches (at least one; Σ weights > 0). `stratum` says where the

@@ -6,9 +6,11 @@
 //! as the cache sees them share their shadow rays there ([`visibility`], parameter `visangle`; 0: one ray
 //! per VPL that could contribute, as in the paper) — and, once placement is over and the region the cache
 //! serves is known, an upper bound over that region (B); each is kept as a quantised distribution over the
-//! VPLs ([`distribution`], about one byte per VPL). A sub-pixel sample draws `lightsamples` VPLs (default
-//! [`DEFAULT_LIGHT_SAMPLES`]; ALGORITHMS.md §6.3 and the paper: one) from each technique F, U, B and C
-//! (uniform over all VPLs; `distributions` may repeat a letter for more draws of it), each the mixture of
+//! VPLs ([`distribution`], about one byte per VPL). A sub-pixel sample draws VPLs from each technique F, U, B
+//! and C (uniform over all VPLs): `lightsamples` per letter of `distributions` (default
+//! [`DEFAULT_LIGHT_SAMPLES`]; ALGORITHMS.md §6.3 and the paper: one each), a count after a letter repeating
+//! it, with up to `learnshares` halvings of U's, B's and C's draws in favour of F that each cache learns from
+//! how well its neighbours sample its own light ([`ImportanceCache::shares`]), each the mixture of
 //! its selected caches' distributions, and combines them by multiple importance sampling ([`mixture`]): the
 //! balance heuristic by default, α-max as an option. Every draw costs one shadow ray.
 //! The positions the draws take in the distributions are stratified across the pixel's sub-pixel samples
@@ -66,10 +68,14 @@ use vpl::{Receiver, Vpls};
 /// Stream tag of VPL generation.
 const STAGE_VPLS: u64 = 0x7670_6c73;
 
+/// Most levels of `learnshares`: U, B and C halved three times.
+pub const MAX_SHARE_LEVEL: u32 = 3;
+
 /// Stratum stream of the baselines' draws (the techniques use their index, 0–4).
 const STREAM_BASELINE: u64 = 16;
 
-/// Most draws one technique may make per sample (its letters in `distributions` times `lightsamples`).
+/// Most draws G may make per sample (its letters in `distributions` times `lightsamples`), and most
+/// `lightsamples`; F, U, B and C may make more ([`params`]).
 const MAX_TECHNIQUE_DRAWS: u32 = lobe::MAX_DRAWS as u32;
 
 /// Default of `lightsamples`: the draws each letter of `distributions` makes per sub-pixel sample.
@@ -79,7 +85,8 @@ const MAX_TECHNIQUE_DRAWS: u32 = lobe::MAX_DRAWS as u32;
 /// on the three 640×360 scenes of `experiments/notes/importance.md`, so further draws come cheap, and, stratified
 /// across the pixel's samples, they lower the error faster than one over their count: error² × time fell
 /// 4.7–5.7× from one to eight draws per technique on each of the three, and 1.3–1.4× more from eight to
-/// sixteen, which doubles the time of an image (the table there).
+/// sixteen, which doubles the time of an image (the table there). How the 32 draws of F, U, B and C are
+/// shared is then learnt per cache (`learnshares`, [`ImportanceCache::shares`]).
 pub const DEFAULT_LIGHT_SAMPLES: u32 = 8;
 
 /// How a sample chooses its VPLs.
@@ -143,6 +150,9 @@ pub struct ImportanceCache {
     /// Whether the draws of a pixel's sub-pixel samples are stratified across them ([`Stratum`]; else each
     /// sample draws independently).
     pub stratify: bool,
+    /// Most times a cache may halve the draws of U, B and C in favour of F (`learnshares`; 0: the shares of
+    /// `distributions` everywhere; [`ImportanceCache::shares`]).
+    pub learn_shares: u32,
 }
 
 /// One importance cache: where it is (B is built from it once its region is known) and its F, U and B
@@ -151,6 +161,9 @@ pub struct ImportanceCache {
 pub struct ImportanceRecord {
     at: ShadingPoint,
     dists: [Option<Quantised>; 3],
+    /// How many times shading near the cache halves the draws of U, B and C in favour of F
+    /// ([`ImportanceCache::shares`]; 0 until the lesson).
+    level: u8,
 }
 
 /// The scene as importance caching reads it: its shading data, the VPLs and the power-sampling table.
@@ -200,10 +213,50 @@ impl ImportanceCache {
         if self.draws > 0 { self.draws } else { self.techniques[..LOBE].iter().sum() }
     }
 
-    /// The techniques as the letters of the `distributions` parameter (a letter per `lightsamples` draws).
+    /// The draws of each technique at level `level`: U, B and C each halved `level` times (rounded down, and
+    /// at least one where they draw), F taking what they give up, so F, U, B and C together draw as many as
+    /// `distributions` asks; G unchanged. Level 0 is `distributions` itself; by default (8 each) level 1 is
+    /// F 20, U, B and C 4, level 2 F 26 and 2 each.
+    ///
+    /// Beyond ALGORITHMS.md §6.3, which gives every technique one draw. Under the balance heuristic the draws
+    /// are one mixture of the techniques' densities, so every draw of U, B or C is taken from F, the technique
+    /// the caches exist for, which is nearly proportional to the light wherever a cache's neighbours see what
+    /// it sees; U, B and C are the defence where they do not. The best fixed shares differ by scene (measured in
+    /// `experiments/notes/importance-shares.md`: F 24, U 4, B 2, C 2 gave sibenik 20–29 % less RMSE than eight each at
+    /// the same time at 640×360, but the bathroom 11 % more at 320×180, whose fireflies — VPLs lighting the blinds
+    /// through gaps its caches do not see — U and B catch), so each cache learns its level ([`Application::lesson`])
+    /// and a shading point takes the mean of its caches' levels, rounded down.
+    fn shares(&self, level: u8) -> [u32; TECHNIQUES] {
+        let mut d = self.techniques;
+        if level == 0 || d[0] == 0 {
+            return d;
+        }
+        let total: u32 = d[..LOBE].iter().sum();
+        for n in d[1..LOBE].iter_mut().filter(|n| **n > 0) {
+            *n = (*n >> level).max(1);
+        }
+        d[0] = total - d[1..LOBE].iter().sum::<u32>();
+        d
+    }
+
+    /// The level of a shading point: the mean of its selected caches' levels, rounded down (the more defensive
+    /// of two).
+    fn level(near: &[Neighbour<'_, ImportanceRecord>]) -> u8 {
+        let n = near.len().max(1) as u32;
+        (near.iter().map(|c| c.record.level as u32).sum::<u32>() / n) as u8
+    }
+
+    /// The techniques as the `distributions` parameter spells them: each letter with its count of
+    /// `lightsamples` draws when that is more than one (`f12u2bcg4`).
     fn letters(&self) -> String {
         let per = self.light_samples.max(1);
-        (0..TECHNIQUES).flat_map(|t| std::iter::repeat_n(LETTERS[t], (self.techniques[t] / per) as usize)).collect()
+        (0..TECHNIQUES)
+            .filter(|&t| self.techniques[t] > 0)
+            .map(|t| match self.techniques[t] / per {
+                1 => LETTERS[t].to_string(),
+                n => format!("{}{n}", LETTERS[t]),
+            })
+            .collect()
     }
 
     /// The per-sample baselines: [`ImportanceCache::baseline_draws`] VPLs drawn uniformly or by flux
@@ -362,12 +415,13 @@ impl Application for ImportanceCache {
             shade_by_reference,
             follow_specular: true,
             shows_environment: true,
+            learns: self.learn_shares > 0 && self.sampling == Sampling::Cache,
             ..CachePlan::default()
         }
     }
 
     fn compute_record(&self, cx: &Lit<'_>, at: &ShadingPoint, _: &mut Rng, rays: &mut RayCounters) -> ImportanceRecord {
-        let Some(x) = cx.receiver(at) else { return ImportanceRecord { at: *at, dists: [None, None, None] } };
+        let Some(x) = cx.receiver(at) else { return ImportanceRecord { at: *at, dists: [None, None, None], level: 0 } };
         let n = cx.vpls.len();
         let mut unoccluded: Vec<f32> =
             (0..n).map(|j| cx.vpls.unoccluded_value(&cx.shading, j, &x).map_or(0.0, luminance)).collect();
@@ -400,7 +454,7 @@ impl Application for ImportanceCache {
         } else {
             vec![0.0f32; n]
         };
-        ImportanceRecord { at: *at, dists: [Quantised::new(&full), Quantised::new(&unoccluded), None] }
+        ImportanceRecord { at: *at, dists: [Quantised::new(&full), Quantised::new(&unoccluded), None], level: 0 }
     }
 
     fn diff(&self, a: &ImportanceRecord, b: &ImportanceRecord) -> f32 {
@@ -421,6 +475,32 @@ impl Application for ImportanceCache {
         }
     }
 
+    /// The level ([`ImportanceCache::shares`]) under which the caches that shading at this cache's site blends
+    /// besides it sample its light with the least variance: its F values as the light, one sample's variance
+    /// under the balance heuristic ([`leave_one_out::sampled`]) at each level up to `learnshares`. Where the
+    /// neighbours' F sees what the cache sees, F alone is nearly proportional to the light and the defensive
+    /// techniques only dilute it; where it does not (a shadow's edge, a VPL behind blinds), U, B and C keep
+    /// their draws.
+    fn lesson(&self, cx: &Lit<'_>, own: &ImportanceRecord, near: &[Neighbour<'_, ImportanceRecord>]) -> u8 {
+        let Some(f) = &own.dists[0] else { return 0 };
+        if near.is_empty() {
+            return 0;
+        }
+        let n = cx.vpls.len();
+        let mut best = (f32::INFINITY, 0u8);
+        for level in 0..=self.learn_shares.min(MAX_SHARE_LEVEL) as u8 {
+            let v = leave_one_out::sampled(f, near.iter().map(|c| &c.record.dists), self.shares(level), n).variance;
+            if v < best.0 {
+                best = (v, level);
+            }
+        }
+        best.1
+    }
+
+    fn keep_lesson(&self, record: &mut ImportanceRecord, lesson: u8) {
+        record.level = lesson;
+    }
+
     fn shade(
         &self,
         cx: &Lit<'_>,
@@ -433,7 +513,8 @@ impl Application for ImportanceCache {
         let start = rng.clone();
         let mut l = cx.emitted(s);
         if let Some(x) = cx.receiver(s) {
-            let lobe = match self.techniques[LOBE] {
+            let draws = self.shares(Self::level(near));
+            let lobe = match draws[LOBE] {
                 0 => None,
                 m => {
                     let mut us = [0u64; lobe::MAX_DRAWS];
@@ -443,7 +524,7 @@ impl Application for ImportanceCache {
                     cx.lobes.at(&cx.vpls, &x, &us[..m as usize])
                 }
             };
-            let mix = Mixture::new(near.iter().map(|c| &c.record.dists), self.techniques, cx.vpls.len(), lobe);
+            let mix = Mixture::new(near.iter().map(|c| &c.record.dists), draws, cx.vpls.len(), lobe);
             let split = cx.split.at(&x);
             l += split.estimate(cx.scene, &cx.shading, &cx.vpls, &x, self.baseline_draws(), rng, rays);
             for t in 0..TECHNIQUES {
@@ -557,6 +638,7 @@ mod tests {
             split_near: 1.0,
             vis_angle: 10.0,
             stratify: true,
+            learn_shares: 2,
         };
         let total = 25_000 * app.record_bytes_bound();
         assert!(total <= 1_000_000_000, "{total}");

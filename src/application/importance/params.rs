@@ -7,9 +7,9 @@
 use crate::error::Result;
 use crate::parse::integrator::{Choice, IntegratorParams, ParamDef, Parameter, Valid};
 
-use super::mixture::{LETTERS, Mis, TECHNIQUES};
+use super::mixture::{LETTERS, LOBE, Mis, TECHNIQUES};
 use super::vpl::Vpls;
-use super::{DEFAULT_LIGHT_SAMPLES, ImportanceCache, MAX_TECHNIQUE_DRAWS, Sampling};
+use super::{DEFAULT_LIGHT_SAMPLES, ImportanceCache, MAX_SHARE_LEVEL, MAX_TECHNIQUE_DRAWS, Sampling};
 use crate::application::Application;
 use crate::application::Baseline;
 
@@ -41,18 +41,22 @@ pub const COMPENSATE: ParamDef<i64> = ParamDef::int(
      drawn by flux at the surface it finds (estimator and reference alike; 0: the clamped sum alone)",
 )
 .between(0, MAX_TECHNIQUE_DRAWS as i64);
+/// Default of `distributions`: every technique once, each drawing `lightsamples` VPLs per sample (before
+/// `learnshares` moves draws to F).
+pub const DEFAULT_DISTRIBUTIONS: &str = "fubcg";
 /// `distributions`: the letters of the techniques that draw.
 pub const DISTRIBUTIONS: ParamDef<String> = ParamDef::text(
     "distributions",
-    "fubcg",
-    "techniques that draw, each letter lightsamples draws: f full, u unoccluded, b bounded, c conservative, g lobe",
+    DEFAULT_DISTRIBUTIONS,
+    "techniques that draw, each letter (or its count after it: f12) lightsamples draws: f full, u unoccluded, b \
+     bounded, c conservative, g lobe",
 );
 /// `lightsamples`: draws per letter.
 pub const LIGHTSAMPLES: ParamDef<i64> = ParamDef::int(
     "lightsamples",
     DEFAULT_LIGHT_SAMPLES as i64,
-    "VPLs each letter of distributions draws per sub-pixel sample (the paper: 1, four light samples per shading \
-     point)",
+    "VPLs each letter of distributions (times its count) draws per sub-pixel sample (the paper: 1 with \
+     distributions fubc, four light samples per shading point)",
 )
 .between(1, MAX_TECHNIQUE_DRAWS as i64);
 /// `mis`: how the techniques combine.
@@ -115,6 +119,15 @@ pub const STRATIFY: ParamDef<bool> = ParamDef::bool(
     "the VPL draws of a pixel's sub-pixel samples are stratified across them (false: independent draws)",
 );
 
+/// `learnshares`.
+pub const LEARNSHARES: ParamDef<i64> = ParamDef::int(
+    "learnshares",
+    2,
+    "most times a cache halves the draws of u, b and c in favour of f, as its neighbours' distributions sample its \
+     own light best (0: the shares of distributions everywhere)",
+)
+.between(0, MAX_SHARE_LEVEL as i64);
+
 /// The table, in its page's order.
 pub const PARAMETERS: &[Parameter] = &[
     VPLS.row,
@@ -132,6 +145,7 @@ pub const PARAMETERS: &[Parameter] = &[
     VISANGLE.row,
     LOBECONE.row,
     STRATIFY.row,
+    LEARNSHARES.row,
 ];
 
 impl ImportanceCache {
@@ -153,6 +167,7 @@ impl ImportanceCache {
         Ok(ImportanceCache {
             lobe_cone: lobe_cone as f32,
             stratify: p.get(&STRATIFY)?,
+            learn_shares: p.get(&LEARNSHARES)? as u32,
             vis_angle: vis_angle as f32,
             split_cone: split_cone as f32,
             split_near: split_near as f32,
@@ -189,6 +204,7 @@ impl ImportanceCache {
             ("visangle", number(self.vis_angle)),
             ("lobecone", number(self.lobe_cone)),
             ("stratify", self.stratify.into()),
+            ("learnshares", self.learn_shares.into()),
         ]
     }
 
@@ -242,21 +258,42 @@ fn read_vpls(p: &IntegratorParams<'_>) -> Result<i64> {
     Ok(vpls)
 }
 
-/// Draws per technique from the letters of `distributions`, each `light_samples` draws.
+/// Most draws of one of F, U, B and C per sample (G's are [`MAX_TECHNIQUE_DRAWS`]: its walk keeps its picks
+/// on the stack).
+const MAX_DRAWS_FUBC: u32 = 64;
+
+/// Most draws technique `t` may make per sample.
+fn max_draws(t: usize) -> u32 {
+    if t == LOBE { MAX_TECHNIQUE_DRAWS } else { MAX_DRAWS_FUBC }
+}
+
+/// Draws per technique from `distributions`: letters, each optionally followed by a count (`f12` is twelve f's),
+/// each letter drawing `light_samples` times.
 fn techniques(p: &IntegratorParams<'_>, letters: &str, light_samples: u32) -> Result<[u32; TECHNIQUES]> {
+    let invalid = || {
+        p.invalid(
+            &DISTRIBUTIONS.row,
+            format!(
+                "must be letters of f, u, b, c, g, each followed by an optional count, each technique drawing at most \
+                 {MAX_DRAWS_FUBC} times (g: {MAX_TECHNIQUE_DRAWS}; a letter's count times lightsamples {light_samples}; \
+                 e.g. \"{}\"), got \"{letters}\"",
+                DEFAULT_DISTRIBUTIONS
+            ),
+        )
+    };
     let mut techniques = [0u32; TECHNIQUES];
-    for ch in letters.chars() {
-        match LETTERS.iter().position(|&l| l == ch.to_ascii_lowercase()) {
-            Some(t) if techniques[t] + light_samples <= MAX_TECHNIQUE_DRAWS => techniques[t] += light_samples,
-            _ => {
-                return Err(p.invalid(
-                    &DISTRIBUTIONS.row,
-                    format!(
-                        "must be letters of f, u, b, c, g, each drawing at most {MAX_TECHNIQUE_DRAWS} times (its count \
-                         times lightsamples {light_samples}; e.g. \"fubcg\"), got \"{letters}\""
-                    ),
-                ));
-            }
+    let mut chars = letters.chars().peekable();
+    while let Some(ch) = chars.next() {
+        let t = LETTERS.iter().position(|&l| l == ch.to_ascii_lowercase()).ok_or_else(invalid)?;
+        let mut digits = String::new();
+        while let Some(d) = chars.next_if(char::is_ascii_digit) {
+            digits.push(d);
+        }
+        let count: u32 = if digits.is_empty() { 1 } else { digits.parse().map_err(|_| invalid())? };
+        let draws = count.checked_mul(light_samples).and_then(|d| d.checked_add(techniques[t]));
+        match draws {
+            Some(d) if d <= max_draws(t) => techniques[t] = d,
+            _ => return Err(invalid()),
         }
     }
     if techniques.iter().all(|&n| n == 0) {

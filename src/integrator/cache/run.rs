@@ -225,6 +225,10 @@ pub fn render_cached<A: Application>(
         let keep = s.params.lookup.keep;
         radii = (0..store.records.len() as u32).into_par_iter().map(|id| index.region_radius(id, keep)).collect();
         store.records.par_iter_mut().zip(&radii).for_each(|(r, &radius)| app.finish_record(cx, r, radius));
+        if app.plan().learns {
+            let lessons = lessons(app, cx, &index, &cache_points, &store.records);
+            store.records.par_iter_mut().zip(lessons).for_each(|(r, l)| app.keep_lesson(r, l));
+        }
         times.finish_records = t.elapsed().as_secs_f64();
         stats.record_bytes_kept = store.records.iter().map(|r| app.record_bytes(r)).sum();
         index_and_store = Some(index);
@@ -245,6 +249,36 @@ pub fn render_cached<A: Application>(
     let mut settings = s.to_json();
     settings.extend(app.settings().into_iter().map(|(k, v)| (k.to_string(), v)));
     Ok(CachedOutput { image, stats, stage1, stage2, discontinuity, settings })
+}
+
+/// Every record's [`Application::lesson`]: the caches the §5 selection at its own site blends, itself left out.
+fn lessons<A: Application>(
+    app: &A,
+    cx: &A::Prepared<'_>,
+    index: &CacheIndex,
+    points: &[(Vec3A, Vec3A)],
+    records: &[A::Record],
+) -> Vec<u8> {
+    (0..records.len())
+        .into_par_iter()
+        .map_init(
+            || (Vec::new(), Vec::new()),
+            |(near, weights), c| {
+                let (p, n) = points[c];
+                index.select(p, n, near);
+                near.retain(|x: &crate::cache::Neighbour| x.id as usize != c);
+                index.interpolate_weights(near, weights);
+                let blend: Vec<_> = weights
+                    .iter()
+                    .map(|&(id, weight)| {
+                        let (p, n) = points[id as usize];
+                        Neighbour { record: &records[id as usize], p, n, weight }
+                    })
+                    .collect();
+                app.lesson(cx, &records[c], &blend)
+            },
+        )
+        .collect()
 }
 
 /// The caches to place: the budget, at most one per valid pixel (with a note when it asks for more). A
