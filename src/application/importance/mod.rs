@@ -9,8 +9,9 @@
 //! VPLs ([`distribution`], about one byte per VPL). A sub-pixel sample draws VPLs from each technique F, U, B
 //! and C (uniform over all VPLs): `lightsamples` per letter of `distributions` (default
 //! [`DEFAULT_LIGHT_SAMPLES`]; ALGORITHMS.md §6.3 and the paper: one each), a count after a letter repeating
-//! it, with up to `learnshares` halvings of U's, B's and C's draws in favour of F that each cache learns from
-//! how well its neighbours sample its own light ([`ImportanceCache::shares`]), each the mixture of
+//! it, optionally (`learnshares`, off by default) with halvings of U's, B's and C's draws in favour of F that
+//! each cache learns from how well its neighbours sample its own light ([`ImportanceCache::shares`]), each the
+//! mixture of
 //! its selected caches' distributions, and combines them by multiple importance sampling ([`mixture`]): the
 //! balance heuristic by default, α-max as an option. Every draw costs one shadow ray.
 //! The positions the draws take in the distributions are stratified across the pixel's sub-pixel samples
@@ -86,7 +87,7 @@ const MAX_TECHNIQUE_DRAWS: u32 = lobe::MAX_DRAWS as u32;
 /// across the pixel's samples, they lower the error faster than one over their count: error² × time fell
 /// 4.7–5.7× from one to eight draws per technique on each of the three, and 1.3–1.4× more from eight to
 /// sixteen, which doubles the time of an image (the table there). How the 32 draws of F, U, B and C are
-/// shared is then learnt per cache (`learnshares`, [`ImportanceCache::shares`]).
+/// shared may be learnt per cache (`learnshares`, [`ImportanceCache::shares`]).
 pub const DEFAULT_LIGHT_SAMPLES: u32 = 8;
 
 /// How a sample chooses its VPLs.
@@ -224,8 +225,10 @@ impl ImportanceCache {
     /// it sees; U, B and C are the defence where they do not. The best fixed shares differ by scene (measured in
     /// `experiments/notes/importance-shares.md`: F 24, U 4, B 2, C 2 gave sibenik 20–29 % less RMSE than eight each at
     /// the same time at 640×360, but the bathroom 11 % more at 320×180, whose fireflies — VPLs lighting the blinds
-    /// through gaps its caches do not see — U and B catch), so each cache learns its level ([`Application::lesson`])
-    /// and a shading point takes the mean of its caches' levels, rounded down.
+    /// through gaps its caches do not see — U and B catch), so each cache may learn its level
+    /// ([`Application::lesson`]) and a shading point takes the mean of its caches' levels, rounded down. Off by
+    /// default: the learnt levels gave the Cornell box and sibenik 13–30 % less RMSE, but the bathroom 3.6 % and
+    /// the small room of `tests/target_error.rs` 24 % more.
     fn shares(&self, level: u8) -> [u32; TECHNIQUES] {
         let mut d = self.techniques;
         if level == 0 || d[0] == 0 {

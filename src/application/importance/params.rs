@@ -122,7 +122,7 @@ pub const STRATIFY: ParamDef<bool> = ParamDef::bool(
 /// `learnshares`.
 pub const LEARNSHARES: ParamDef<i64> = ParamDef::int(
     "learnshares",
-    2,
+    0,
     "most times a cache halves the draws of u, b and c in favour of f, as its neighbours' distributions sample its \
      own light best (0: the shares of distributions everywhere)",
 )
