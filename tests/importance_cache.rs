@@ -520,10 +520,10 @@ fn stats_report_the_records_and_geometry_free_dgs() {
     assert_eq!(c.settings["vpls"], 1000);
     assert_eq!(c.settings["distributions"], "fubcg");
     // Eight draws per letter by default; the baselines draw as many as F, U, B and C together; the caches
-    // learn no shares unless asked (`learnshares`).
+    // learn their shares, halving U and B up to twice (`learnshares`).
     assert_eq!(c.settings["lightsamples"], 8);
     assert_eq!(c.settings["draws"], 32);
-    assert_eq!(c.settings["learnshares"], 0);
+    assert_eq!(c.settings["learnshares"], 2);
     // A count after a letter repeats it: the same render as the letters spelled out.
     let with = |d: &str, l: &str| {
         let set = [("vpls", "1000"), ("caches", "30"), ("distributions", d), ("learnshares", l)];
@@ -531,8 +531,8 @@ fn stats_report_the_records_and_geometry_free_dgs() {
     };
     assert_eq!(with("f2ubcg", "2"), with("ffubcg", "2"));
     // The learnt shares move the draws; without them the shares are those of `distributions`.
-    assert_eq!(with("fubcg", "0"), out.image.pixels);
-    assert_ne!(with("fubcg", "2"), out.image.pixels);
+    assert_eq!(with("fubcg", "2"), out.image.pixels);
+    assert_ne!(with("fubcg", "0"), out.image.pixels);
     // What the scene gave beside what was asked: every VPL here, from fewer light paths (a path leaves
     // several); making them is a stage of its own, inside the total.
     assert_eq!(c.stats.prepared["vpls_generated"], 1000);

@@ -9,10 +9,9 @@
 //! VPLs ([`distribution`], about one byte per VPL). A sub-pixel sample draws VPLs from each technique F, U, B
 //! and C (uniform over all VPLs): `lightsamples` per letter of `distributions` (default
 //! [`DEFAULT_LIGHT_SAMPLES`]; ALGORITHMS.md §6.3 and the paper: one each), a count after a letter repeating
-//! it, optionally (`learnshares`, off by default) with halvings of U's, B's and C's draws in favour of F that
-//! each cache learns from how well its neighbours sample its own light ([`ImportanceCache::shares`]), each the
-//! mixture of
-//! its selected caches' distributions, and combines them by multiple importance sampling ([`mixture`]): the
+//! it, with halvings of U's and B's draws in favour of F that each cache learns from how well its neighbours
+//! sample its own light (`learnshares`, default 2; [`ImportanceCache::shares`]), each the mixture of its
+//! selected caches' distributions, and combines them by multiple importance sampling ([`mixture`]): the
 //! balance heuristic by default, α-max as an option. Every draw costs one shadow ray.
 //! The positions the draws take in the distributions are stratified across the pixel's sub-pixel samples
 //! ([`Stratum`], parameter `stratify`) — a choice beyond ALGORITHMS.md §6.3, which draws each sample
@@ -62,14 +61,14 @@ use crate::shading::{Spectrum, luminance};
 use super::{Application, CachePlan, LeaveOneOut, Neighbour, PerSample, Study};
 use distribution::Quantised;
 use lobe::LobeTree;
-use mixture::{LETTERS, LOBE, Mis, Mixture, TECHNIQUES};
+use mixture::{CONSERVATIVE, LETTERS, LOBE, Mis, Mixture, TECHNIQUES};
 use split::Split;
 use vpl::{Receiver, Vpls};
 
 /// Stream tag of VPL generation.
 const STAGE_VPLS: u64 = 0x7670_6c73;
 
-/// Most levels of `learnshares`: U, B and C halved three times.
+/// Most levels of `learnshares`: U and B halved three times.
 pub const MAX_SHARE_LEVEL: u32 = 3;
 
 /// Stratum stream of the baselines' draws (the techniques use their index, 0–4).
@@ -151,7 +150,7 @@ pub struct ImportanceCache {
     /// Whether the draws of a pixel's sub-pixel samples are stratified across them ([`Stratum`]; else each
     /// sample draws independently).
     pub stratify: bool,
-    /// Most times a cache may halve the draws of U, B and C in favour of F (`learnshares`; 0: the shares of
+    /// Most times a cache may halve the draws of U and B in favour of F (`learnshares`; 0: the shares of
     /// `distributions` everywhere; [`ImportanceCache::shares`]).
     pub learn_shares: u32,
 }
@@ -162,7 +161,7 @@ pub struct ImportanceCache {
 pub struct ImportanceRecord {
     at: ShadingPoint,
     dists: [Option<Quantised>; 3],
-    /// How many times shading near the cache halves the draws of U, B and C in favour of F
+    /// How many times shading near the cache halves the draws of U and B in favour of F
     /// ([`ImportanceCache::shares`]; 0 until the lesson).
     level: u8,
 }
@@ -214,28 +213,33 @@ impl ImportanceCache {
         if self.draws > 0 { self.draws } else { self.techniques[..LOBE].iter().sum() }
     }
 
-    /// The draws of each technique at level `level`: U, B and C each halved `level` times (rounded down, and
-    /// at least one where they draw), F taking what they give up, so F, U, B and C together draw as many as
-    /// `distributions` asks; G unchanged. Level 0 is `distributions` itself; by default (8 each) level 1 is
-    /// F 20, U, B and C 4, level 2 F 26 and 2 each.
+    /// The draws of each technique at level `level`: U and B each halved `level` times (rounded down, and at
+    /// least one where they draw), F taking what they give up, so F, U, B and C together draw as many as
+    /// `distributions` asks; C and G unchanged. Level 0 is `distributions` itself; by default (8 each) level 1
+    /// is F 16, U 4, B 4, C 8, level 2 F 20, U 2, B 2, C 8.
     ///
     /// Beyond ALGORITHMS.md §6.3, which gives every technique one draw. Under the balance heuristic the draws
-    /// are one mixture of the techniques' densities, so every draw of U, B or C is taken from F, the technique
+    /// are one mixture of the techniques' densities, so every draw of U or B is taken from F, the technique
     /// the caches exist for, which is nearly proportional to the light wherever a cache's neighbours see what
     /// it sees; U, B and C are the defence where they do not. The best fixed shares differ by scene (measured in
     /// `experiments/notes/importance-shares.md`: F 24, U 4, B 2, C 2 gave sibenik 20–29 % less RMSE than eight each at
     /// the same time at 640×360, but the bathroom 11 % more at 320×180, whose fireflies — VPLs lighting the blinds
-    /// through gaps its caches do not see — U and B catch), so each cache may learn its level
-    /// ([`Application::lesson`]) and a shading point takes the mean of its caches' levels, rounded down. Off by
-    /// default: the learnt levels gave the Cornell box and sibenik 13–30 % less RMSE, but the bathroom 3.6 % and
-    /// the small room of `tests/target_error.rs` 24 % more.
+    /// through gaps its caches do not see — U and B catch), so each cache learns its level
+    /// ([`Application::lesson`]) and a shading point takes the mean of its caches' levels, rounded down.
+    ///
+    /// C keeps its draws: it is the one technique whose weight is bounded everywhere (by the VPL count over its
+    /// draws), and the lesson cannot see the light it guards — VPLs a shading point sees that no cache near it
+    /// does, such as those behind its caches' tangent planes. Halving C too (the first version) gave the small
+    /// room of `tests/target_error.rs` fireflies (24 % more RMSE); with C kept it is within 3 % there, the
+    /// bathroom ties in RMSE (0.2 %) with 5.7 % less HDR-FLIP, and the Cornell box and sibenik keep most of the
+    /// gain (10–11 % and 19–21 % less RMSE at about the same time).
     fn shares(&self, level: u8) -> [u32; TECHNIQUES] {
         let mut d = self.techniques;
         if level == 0 || d[0] == 0 {
             return d;
         }
         let total: u32 = d[..LOBE].iter().sum();
-        for n in d[1..LOBE].iter_mut().filter(|n| **n > 0) {
+        for n in d[1..CONSERVATIVE].iter_mut().filter(|n| **n > 0) {
             *n = (*n >> level).max(1);
         }
         d[0] = total - d[1..LOBE].iter().sum::<u32>();
@@ -482,8 +486,8 @@ impl Application for ImportanceCache {
     /// besides it sample its light with the least variance: its F values as the light, one sample's variance
     /// under the balance heuristic ([`leave_one_out::sampled`]) at each level up to `learnshares`. Where the
     /// neighbours' F sees what the cache sees, F alone is nearly proportional to the light and the defensive
-    /// techniques only dilute it; where it does not (a shadow's edge, a VPL behind blinds), U, B and C keep
-    /// their draws.
+    /// techniques only dilute it; where it does not (a shadow's edge, a VPL behind blinds), U and B keep
+    /// their draws (and C always keeps its own: [`ImportanceCache::shares`]).
     fn lesson(&self, cx: &Lit<'_>, own: &ImportanceRecord, near: &[Neighbour<'_, ImportanceRecord>]) -> u8 {
         let Some(f) = &own.dists[0] else { return 0 };
         if near.is_empty() {

@@ -122,9 +122,9 @@ pub const STRATIFY: ParamDef<bool> = ParamDef::bool(
 /// `learnshares`.
 pub const LEARNSHARES: ParamDef<i64> = ParamDef::int(
     "learnshares",
-    0,
-    "most times a cache halves the draws of u, b and c in favour of f, as its neighbours' distributions sample its \
-     own light best (0: the shares of distributions everywhere)",
+    2,
+    "most times a cache halves the draws of u and b in favour of f, as its neighbours' distributions sample its \
+     own light best (c keeps its draws; 0: the shares of distributions everywhere)",
 )
 .between(0, MAX_SHARE_LEVEL as i64);
 
