@@ -625,17 +625,16 @@ impl Application for ImportanceCache {
 mod tests {
     use super::*;
 
-    #[test]
-    fn the_record_bound_meets_the_issue_budget() {
-        // 25K caches × 8192 VPLs must fit in 1 GB.
-        let app = ImportanceCache {
+    /// Importance caching over 8192 VPLs whose techniques draw `techniques` times per sample.
+    fn app(techniques: [u32; TECHNIQUES]) -> ImportanceCache {
+        ImportanceCache {
             vpls: 8192,
             max_depth: 5,
             vpl_seed: 0,
             clamp: 0.025,
             clamp_distance: 0.25,
             compensate: 4,
-            techniques: [1, 1, 1, 1, 0],
+            techniques,
             light_samples: 1,
             lobe_cone: 45.0,
             mis: Mis::Balance,
@@ -646,9 +645,29 @@ mod tests {
             vis_angle: 10.0,
             stratify: true,
             learn_shares: 2,
-        };
+        }
+    }
+
+    #[test]
+    fn the_record_bound_meets_the_issue_budget() {
+        // 25K caches × 8192 VPLs must fit in 1 GB.
+        let app = app([1, 1, 1, 1, 0]);
         let total = 25_000 * app.record_bytes_bound();
         assert!(total <= 1_000_000_000, "{total}");
+    }
+
+    #[test]
+    fn the_levels_move_the_draws_of_u_and_b_to_f_and_leave_c_and_g_alone() {
+        let with = app;
+        let app = with([8, 8, 8, 8, 8]);
+        assert_eq!(app.shares(0), [8, 8, 8, 8, 8]);
+        assert_eq!(app.shares(1), [16, 4, 4, 8, 8]);
+        assert_eq!(app.shares(2), [20, 2, 2, 8, 8]);
+        assert_eq!(app.shares(3), [22, 1, 1, 8, 8]);
+        // A technique that does not draw stays out; one that draws keeps at least one draw.
+        assert_eq!(with([8, 0, 2, 8, 0]).shares(3), [9, 0, 1, 8, 0]);
+        // Without F there is no one to give the draws to.
+        assert_eq!(with([0, 8, 8, 8, 0]).shares(2), [0, 8, 8, 8, 0]);
     }
 
     #[test]
