@@ -659,16 +659,15 @@ mod tests {
 
     #[test]
     fn the_levels_move_the_draws_of_u_and_b_to_f_and_leave_c_and_g_alone() {
-        let with = app;
-        let app = with([8, 8, 8, 8, 8]);
-        assert_eq!(app.shares(0), [8, 8, 8, 8, 8]);
-        assert_eq!(app.shares(1), [16, 4, 4, 8, 8]);
-        assert_eq!(app.shares(2), [20, 2, 2, 8, 8]);
-        assert_eq!(app.shares(3), [22, 1, 1, 8, 8]);
+        let eight = app([8, 8, 8, 8, 8]);
+        assert_eq!(eight.shares(0), [8, 8, 8, 8, 8]);
+        assert_eq!(eight.shares(1), [16, 4, 4, 8, 8]);
+        assert_eq!(eight.shares(2), [20, 2, 2, 8, 8]);
+        assert_eq!(eight.shares(3), [22, 1, 1, 8, 8]);
         // A technique that does not draw stays out; one that draws keeps at least one draw.
-        assert_eq!(with([8, 0, 2, 8, 0]).shares(3), [9, 0, 1, 8, 0]);
+        assert_eq!(app([8, 0, 2, 8, 0]).shares(3), [9, 0, 1, 8, 0]);
         // Without F there is no one to give the draws to.
-        assert_eq!(with([0, 8, 8, 8, 0]).shares(2), [0, 8, 8, 8, 0]);
+        assert_eq!(app([0, 8, 8, 8, 0]).shares(2), [0, 8, 8, 8, 0]);
     }
 
     #[test]
