@@ -524,6 +524,7 @@ fn stats_report_the_records_and_geometry_free_dgs() {
     assert_eq!(c.settings["lightsamples"], 8);
     assert_eq!(c.settings["draws"], 32);
     assert_eq!(c.settings["learnshares"], 2);
+    assert_eq!(c.settings["sharelevel"], "mean");
     // A count after a letter repeats it: the same render as the letters spelled out.
     let with = |d: &str, l: &str| {
         let set = [("vpls", "1000"), ("caches", "30"), ("distributions", d), ("learnshares", l)];
@@ -533,6 +534,11 @@ fn stats_report_the_records_and_geometry_free_dgs() {
     // The learnt shares move the draws; without them the shares are those of `distributions`.
     assert_eq!(with("fubcg", "2"), out.image.pixels);
     assert_ne!(with("fubcg", "0"), out.image.pixels);
+    // A shading point takes the mean of its caches' levels by default; `sharelevel min` the least, which only
+    // moves draws back to U and B (more of them where a cache near it kept its defence).
+    let min = render_with(&loaded, &[("vpls", "1000"), ("caches", "30"), ("sharelevel", "min")], 1, None).unwrap();
+    assert_ne!(min.image.pixels, out.image.pixels);
+    assert_eq!(min.cache.unwrap().settings["sharelevel"], "min");
     // What the scene gave beside what was asked: every VPL here, from fewer light paths (a path leaves
     // several); making them is a stage of its own, inside the total.
     assert_eq!(c.stats.prepared["vpls_generated"], 1000);
@@ -572,6 +578,7 @@ fn bad_parameters_and_absurd_budgets_are_clear_errors() {
         ("distributions", "fubcg5", "g: 16"),
         ("distributions", "f99999999999", "at most 64 times"),
         ("learnshares", "4", "between 0 and 3"),
+        ("sharelevel", "max", "min"),
         ("lightsamples", "0", "between 1 and 16"),
         ("lightsamples", "17", "between 1 and 16"),
         ("distributions", "", "at least one"),

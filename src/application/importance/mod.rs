@@ -110,6 +110,24 @@ impl Sampling {
     }
 }
 
+/// How a shading point combines the learnt levels of its caches ([`ImportanceCache::shares`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShareLevel {
+    /// The mean of their levels, rounded down (the default).
+    Mean,
+    /// The smallest of their levels: the shares of the most defensive cache.
+    Min,
+}
+
+impl ShareLevel {
+    fn name(self) -> &'static str {
+        match self {
+            ShareLevel::Mean => "mean",
+            ShareLevel::Min => "min",
+        }
+    }
+}
+
 /// The importance-caching application's settings.
 #[derive(Clone, Debug)]
 pub struct ImportanceCache {
@@ -153,6 +171,8 @@ pub struct ImportanceCache {
     /// Most times a cache may halve the draws of U and B in favour of F (`learnshares`; 0: the shares of
     /// `distributions` everywhere; [`ImportanceCache::shares`]).
     pub learn_shares: u32,
+    /// How a shading point takes its caches' levels (`sharelevel`).
+    pub share_level: ShareLevel,
 }
 
 /// One importance cache: where it is (B is built from it once its region is known) and its F, U and B
@@ -248,10 +268,24 @@ impl ImportanceCache {
     }
 
     /// The level of a shading point: the mean of its selected caches' levels, rounded down (the more defensive
-    /// of two).
-    fn level(near: &[Neighbour<'_, ImportanceRecord>]) -> u8 {
-        let n = near.len().max(1) as u32;
-        (near.iter().map(|c| c.record.level as u32).sum::<u32>() / n) as u8
+    /// of two), or with `sharelevel min` the smallest.
+    ///
+    /// Why `min` is offered: a cache's lesson is made at its own site, so where every cache near a shading point
+    /// misses a VPL the point sees (occluded or behind the caches' tangent planes), no lesson can tell, and U's
+    /// and B's draws are what catches it. Under the mean one cache whose neighbours agree with it can lower
+    /// the level of a shading point that its other caches would keep defended. Measured in
+    /// `experiments/notes/importance-shares.md` ("The mean of the levels or the least"): the Cornell box's
+    /// losses with the learnt shares at 160×90 and 174 caches are fireflies of that kind, and the least level
+    /// removes most of them.
+    fn level(&self, near: &[Neighbour<'_, ImportanceRecord>]) -> u8 {
+        let levels = near.iter().map(|c| c.record.level);
+        match self.share_level {
+            ShareLevel::Mean => {
+                let n = near.len().max(1) as u32;
+                (levels.map(u32::from).sum::<u32>() / n) as u8
+            }
+            ShareLevel::Min => levels.min().unwrap_or(0),
+        }
     }
 
     /// The techniques as the `distributions` parameter spells them: each letter with its count of
@@ -521,7 +555,7 @@ impl Application for ImportanceCache {
         let start = rng.clone();
         let mut l = cx.emitted(s);
         if let Some(x) = cx.receiver(s) {
-            let draws = self.shares(Self::level(near));
+            let draws = self.shares(self.level(near));
             let lobe = match draws[LOBE] {
                 0 => None,
                 m => {
@@ -646,6 +680,7 @@ mod tests {
             vis_angle: 10.0,
             stratify: true,
             learn_shares: 2,
+            share_level: ShareLevel::Mean,
         }
     }
 

@@ -9,7 +9,7 @@ use crate::parse::integrator::{Choice, IntegratorParams, ParamDef, Parameter, Va
 
 use super::mixture::{LETTERS, LOBE, Mis, TECHNIQUES};
 use super::vpl::Vpls;
-use super::{DEFAULT_LIGHT_SAMPLES, ImportanceCache, MAX_SHARE_LEVEL, MAX_TECHNIQUE_DRAWS, Sampling};
+use super::{DEFAULT_LIGHT_SAMPLES, ImportanceCache, MAX_SHARE_LEVEL, MAX_TECHNIQUE_DRAWS, Sampling, ShareLevel};
 use crate::application::Application;
 use crate::application::Baseline;
 
@@ -128,6 +128,15 @@ pub const LEARNSHARES: ParamDef<i64> = ParamDef::int(
 )
 .between(0, MAX_SHARE_LEVEL as i64);
 
+/// `sharelevel`: how a shading point combines its caches' learnt levels.
+pub const SHARELEVEL: Choice<ShareLevel> = Choice::new(
+    "sharelevel",
+    "mean",
+    &[("mean", ShareLevel::Mean), ("min", ShareLevel::Min)],
+    "how a shading point takes the learnt levels of its caches: mean (rounded down) or min (the most defensive \
+     of them)",
+);
+
 /// The table, in its page's order.
 pub const PARAMETERS: &[Parameter] = &[
     VPLS.row,
@@ -146,6 +155,7 @@ pub const PARAMETERS: &[Parameter] = &[
     LOBECONE.row,
     STRATIFY.row,
     LEARNSHARES.row,
+    SHARELEVEL.row,
 ];
 
 impl ImportanceCache {
@@ -168,6 +178,7 @@ impl ImportanceCache {
             lobe_cone: lobe_cone as f32,
             stratify: p.get(&STRATIFY)?,
             learn_shares: p.get(&LEARNSHARES)? as u32,
+            share_level: p.choice(&SHARELEVEL)?,
             vis_angle: vis_angle as f32,
             split_cone: split_cone as f32,
             split_near: split_near as f32,
@@ -205,6 +216,7 @@ impl ImportanceCache {
             ("lobecone", number(self.lobe_cone)),
             ("stratify", self.stratify.into()),
             ("learnshares", self.learn_shares.into()),
+            ("sharelevel", self.share_level.name().into()),
         ]
     }
 
