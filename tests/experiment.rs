@@ -223,3 +223,46 @@ fn replot_of_a_spec_sweep_draws_one_line_per_application_and_method() {
     assert!(other.contains("maxdistance-0.5"));
     assert!(dir.path("s-cacheao-10-error-vs-maxdistance.svg").is_file(), "{:?}", dir.entries());
 }
+
+#[test]
+fn pool_judges_refine_over_the_cells_of_several_sweeps_and_a_later_sweep_replaces_a_cell() {
+    // Issue 43's "mean over the cells" spans sweeps of different sizes: --pool reads each folder's
+    // results.csv, keeps cells of different sizes apart, and takes a cell measured again from the later folder.
+    let dir = common::TempDir::new("pool");
+    let head = "id,status,scene,application,placement,method,caches,seed,width,height,rmse,flip,total_s\n";
+    let sweep = |name: &str, size: (u32, u32), app: &str, refine: f64| {
+        let mut csv = String::from(head);
+        for seed in 0..3 {
+            let j = seed as f64 * 1e-4;
+            for (p, r) in [("im", 1.0), ("sd", 1.1), ("sd+as", 1.2), ("vgc", 1.0), ("vgc+dgs", 1.0), ("refine", refine)]
+            {
+                let (w, h) = size;
+                csv += &format!("{p}-{seed},ok,s,{app},{p},{p},100,{seed},{w},{h},{},{},1.0\n", r + j, r + j);
+            }
+        }
+        std::fs::create_dir_all(dir.path(name)).unwrap();
+        std::fs::write(dir.path(name).join("results.csv"), csv).unwrap();
+    };
+    sweep("a", (160, 90), "cacheao", 0.8);
+    sweep("b", (320, 180), "cacheao", 0.7);
+    sweep("c", (160, 90), "cacheao", 0.9);
+    let run = |dirs: &[&str]| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_cachert"));
+        c.arg("experiment");
+        for d in dirs {
+            c.arg("--pool").arg(dir.path(d));
+        }
+        c.output().unwrap()
+    };
+    let o = run(&["a", "b", "c"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let md = String::from_utf8_lossy(&o.stdout);
+    assert!(md.contains("| c | s 160x90 cacheao | 100 | im 1.00010 | 0.900+ | 0.900+ | 0.900+ |"), "{md}");
+    assert!(md.contains("| b | s 320x180 cacheao | 100 |"), "{md}");
+    assert!(!md.contains("| a |"), "a's cell is replaced by c's: {md}");
+    assert!(md.contains("| **every cell: 2** | loses 0, wins 2 | 0.800 | 0.800 (loses 0) |"), "{md}");
+    // A folder without results is a clear error, and nothing is printed as if pooled.
+    let o = run(&["a", "missing"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("missing") && o.stdout.is_empty(), "{}", stderr(&o));
+}

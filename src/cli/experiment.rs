@@ -25,7 +25,7 @@ pub struct ExperimentArgs {
     #[arg(long, requires = "spec", conflicts_with = "emit_jobs")]
     pub collect: bool,
     /// Scene files (repeatable).
-    #[arg(long = "scene", required_unless_present_any = ["spec", "replot"], conflicts_with = "spec")]
+    #[arg(long = "scene", required_unless_present_any = ["spec", "replot", "pool"], conflicts_with = "spec")]
     pub scenes: Vec<PathBuf>,
     /// Film resolution WxH for every scene (e.g. 640x360).
     #[arg(long, value_parser = super::parse_resolution, conflicts_with = "spec")]
@@ -68,10 +68,21 @@ pub struct ExperimentArgs {
     /// that changes the per-pixel estimators).
     #[arg(long, value_name = "DIR2", requires = "replot")]
     pub baselines: Option<PathBuf>,
+    /// Render nothing: judge each placement beyond the paper's five (`refine`) against them over the cells
+    /// of several finished sweeps together (repeat the flag, one folder each; a cell measured again by a
+    /// later folder replaces the earlier one's) and print the tables as Markdown.
+    #[arg(long, value_name = "DIR", conflicts_with_all = [
+        "spec", "scenes", "resolution", "integrator", "caches", "placements", "seeds", "set", "out", "nthreads",
+        "baseline_samples", "replot",
+    ])]
+    pub pool: Vec<PathBuf>,
 }
 
 /// Runs the sweep and returns the table.
 pub fn run(a: &ExperimentArgs) -> Result<String> {
+    if !a.pool.is_empty() {
+        return crate::experiment::pool::markdown(&a.pool);
+    }
     if let (Some(dir), Some(other)) = (&a.replot, &a.baselines) {
         let written = crate::experiment::results::rebuild_against(dir, other)?;
         return Ok(format!("rebuilt: {}\n", written.display()));

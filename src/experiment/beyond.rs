@@ -25,58 +25,129 @@ fn marked(a: &Summary, b: &Summary) -> String {
     format!("{:.3}{mark}", a.mean / b.mean)
 }
 
-/// One table per plain cache method that is not one of [`PAPER`], over every cell where it and all five ran.
-pub fn against_the_paper(records: &[Record]) -> Vec<Table> {
-    let mut newcomers: Vec<String> = Vec::new();
+/// One cell in which a newcomer and all five ran: its scores against the best of the five, VGC+DGS and IM.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cell {
+    /// The scene.
+    pub scene: String,
+    /// The application.
+    pub application: String,
+    /// The budget.
+    pub caches: usize,
+    /// The one of the five with the lowest mean RMSE, and that mean.
+    pub best: (String, f64),
+    /// The newcomer's mean RMSE over the best's, marked as [`marked`] does.
+    pub vs_best: String,
+    /// The newcomer's mean RMSE over VGC+DGS's, marked.
+    pub vs_dgs: String,
+    /// The newcomer's mean HDR-FLIP over IM's, marked.
+    pub flip_vs_im: String,
+    /// The unmarked ratio to VGC+DGS's mean RMSE.
+    pub rmse_ratio: f64,
+    /// The unmarked ratio to IM's mean HDR-FLIP.
+    pub flip_ratio: f64,
+    /// Clearly worse than the best of the five in RMSE.
+    pub loses_rmse: bool,
+    /// Clearly better than the best of the five in RMSE.
+    pub wins_rmse: bool,
+    /// Clearly above IM in HDR-FLIP.
+    pub loses_flip: bool,
+}
+
+/// The plain cache methods that are not one of [`PAPER`], sorted.
+pub fn newcomers(records: &[Record]) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
     for r in ok(records).filter(|r| is_cache_run(r) && r.varied.is_empty()) {
-        if !PAPER.contains(&r.placement.as_str()) && !newcomers.contains(&r.placement) {
-            newcomers.push(r.placement.clone());
+        if !PAPER.contains(&r.placement.as_str()) && !out.contains(&r.placement) {
+            out.push(r.placement.clone());
         }
     }
-    newcomers.sort();
+    out.sort();
+    out
+}
+
+/// Every cell (scene, application, budget) where `m` and all five ran, in scene, application and budget order.
+pub fn cells(records: &[Record], m: &str) -> Vec<Cell> {
     let mut out = Vec::new();
-    for m in newcomers {
-        let (mut rows, mut rmse_vs_dgs, mut flip_vs_im) = (Vec::new(), Vec::new(), Vec::new());
-        let (mut cells, mut lose_rmse, mut lose_flip, mut win_rmse) = (0, 0, 0, 0);
-        for (scene, app) in pairs(records) {
-            for caches in summary::budgets(records, &scene, &app) {
-                let at = summary::methods_at(records, &scene, &app, caches);
-                let paper: Option<Vec<(&str, (Summary, Summary))>> =
-                    PAPER.iter().map(|p| at.get(*p).and_then(|rs| errors(rs)).map(|e| (*p, e))).collect();
-                let (Some(paper), Some((r, f))) = (paper, at.get(&m).and_then(|rs| errors(rs))) else { continue };
-                let Some((best, (br, _))) = paper.iter().min_by(|a, b| a.1.0.mean.total_cmp(&b.1.0.mean)) else {
-                    continue;
-                };
-                let (_, (_, im_f)) = paper[0];
-                let (_, (dgs_r, _)) = paper[4];
-                cells += 1;
-                lose_rmse += usize::from(br.clearly_below(&r));
-                win_rmse += usize::from(r.clearly_below(br));
-                lose_flip += usize::from(im_f.clearly_below(&f));
-                rmse_vs_dgs.push(r.mean / dgs_r.mean);
-                flip_vs_im.push(f.mean / im_f.mean);
-                rows.push(vec![
-                    format!("{scene} {app}"),
-                    caches.to_string(),
-                    format!("{best} {:.5}", br.mean),
-                    marked(&r, br),
-                    marked(&r, &dgs_r),
-                    marked(&f, &im_f),
-                ]);
-            }
+    for (scene, app) in pairs(records) {
+        for caches in summary::budgets(records, &scene, &app) {
+            let at = summary::methods_at(records, &scene, &app, caches);
+            let paper: Option<Vec<(&str, (Summary, Summary))>> =
+                PAPER.iter().map(|p| at.get(*p).and_then(|rs| errors(rs)).map(|e| (*p, e))).collect();
+            let (Some(paper), Some((r, f))) = (paper, at.get(m).and_then(|rs| errors(rs))) else { continue };
+            let Some((best, (br, _))) = paper.iter().min_by(|a, b| a.1.0.mean.total_cmp(&b.1.0.mean)) else {
+                continue;
+            };
+            let (_, (_, im_f)) = paper[0];
+            let (_, (dgs_r, _)) = paper[4];
+            out.push(Cell {
+                scene: scene.clone(),
+                application: app.clone(),
+                caches,
+                best: (best.to_string(), br.mean),
+                vs_best: marked(&r, br),
+                vs_dgs: marked(&r, &dgs_r),
+                flip_vs_im: marked(&f, &im_f),
+                rmse_ratio: r.mean / dgs_r.mean,
+                flip_ratio: f.mean / im_f.mean,
+                loses_rmse: br.clearly_below(&r),
+                wins_rmse: r.clearly_below(br),
+                loses_flip: im_f.clearly_below(&f),
+            });
         }
-        if rows.is_empty() {
+    }
+    out
+}
+
+/// The last row of a newcomer's table: how many cells it loses and wins in RMSE, the mean of its ratios to
+/// VGC+DGS's RMSE and to IM's HDR-FLIP, and the cells it loses there.
+pub fn mean_row(label: String, cells: &[Cell]) -> Vec<String> {
+    let n = cells.len().max(1) as f64;
+    let count = |f: fn(&Cell) -> bool| cells.iter().filter(|c| f(c)).count();
+    vec![
+        label,
+        String::new(),
+        String::new(),
+        format!("loses {}, wins {}", count(|c| c.loses_rmse), count(|c| c.wins_rmse)),
+        format!("{:.3}", cells.iter().map(|c| c.rmse_ratio).sum::<f64>() / n),
+        format!("{:.3} (loses {})", cells.iter().map(|c| c.flip_ratio).sum::<f64>() / n, count(|c| c.loses_flip)),
+    ]
+}
+
+/// The columns of a newcomer's table.
+pub fn header(m: &str) -> Vec<String> {
+    vec![
+        "scene, application".into(),
+        "caches".into(),
+        "best of the five (RMSE)".into(),
+        format!("{m} / best"),
+        format!("{m} / vgc+dgs"),
+        format!("{m} FLIP / IM"),
+    ]
+}
+
+/// One table per plain cache method that is not one of [`PAPER`], over every cell where it and all five ran.
+pub fn against_the_paper(records: &[Record]) -> Vec<Table> {
+    let mut out = Vec::new();
+    for m in newcomers(records) {
+        let cells = cells(records, &m);
+        if cells.is_empty() {
             continue;
         }
-        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
-        rows.push(vec![
-            format!("mean over {cells} cells"),
-            String::new(),
-            String::new(),
-            format!("loses {lose_rmse}, wins {win_rmse}"),
-            format!("{:.3}", mean(&rmse_vs_dgs)),
-            format!("{:.3} (loses {lose_flip})", mean(&flip_vs_im)),
-        ]);
+        let mut rows: Vec<Vec<String>> = cells
+            .iter()
+            .map(|c| {
+                vec![
+                    format!("{} {}", c.scene, c.application),
+                    c.caches.to_string(),
+                    format!("{} {:.5}", c.best.0, c.best.1),
+                    c.vs_best.clone(),
+                    c.vs_dgs.clone(),
+                    c.flip_vs_im.clone(),
+                ]
+            })
+            .collect();
+        rows.push(mean_row(format!("mean over {} cells", cells.len()), &cells));
         out.push(Table {
             title: format!("{m} against the paper's best"),
             note: format!(
@@ -86,14 +157,7 @@ pub fn against_the_paper(records: &[Record]) -> Vec<Table> {
                  last row: cells {m} loses and wins in RMSE against the best, the mean of the ratios to VGC+DGS's \
                  RMSE, and of the ratios to IM's HDR-FLIP (with the cells it loses there)."
             ),
-            header: vec![
-                "scene, application".into(),
-                "caches".into(),
-                "best of the five (RMSE)".into(),
-                format!("{m} / best"),
-                format!("{m} / vgc+dgs"),
-                format!("{m} FLIP / IM"),
-            ],
+            header: header(&m),
             rows,
         });
     }

@@ -22,6 +22,7 @@ pub mod figures;
 pub mod jobs;
 pub mod palette;
 mod per_pixel;
+pub mod pool;
 pub mod ratios;
 pub mod report;
 pub mod results;
