@@ -310,6 +310,15 @@ pub trait Application: Sync + Sized {
         let _ = (cx, record, region);
     }
 
+    /// A copy of these settings whose shading draws about `keep` (0 < `keep` < 1) of its samples, for a
+    /// target error the caches already beat where the error is the shading's noise
+    /// ([`crate::placement::CacheOracle::thin`]); `None` (the default) where it is not (an interpolation's
+    /// bias), or where no fewer draws are possible. It must not change what a record holds.
+    fn thinned(&self, keep: f32) -> Option<Self> {
+        let _ = keep;
+        None
+    }
+
     /// Called once per record after every [`Application::finish_record`], where the plan asks for it
     /// ([`CachePlan::learns`]), with the caches that shading at the record's own site would blend besides it
     /// (the §5 selection there with the cache itself left out; weights 1 / Dist): a small number that

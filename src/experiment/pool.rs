@@ -22,10 +22,13 @@ use crate::error::Result;
 /// The key of a cell.
 type Key = (Option<[u32; 2]>, String, String, usize);
 
+/// Each pooled cell's sweep (its folder's name), by renamed scene, application and budget.
+pub type Sources = BTreeMap<(String, String, usize), String>;
+
 /// The sweeps' plain cache runs as one list, each record's scene named with its resolution ("sibenik
 /// 160x90") so that cells of different sizes stay apart, and with every cell taken from the last sweep that
 /// measured it; beside it, each cell's sweep (its folder's name), by the renamed scene, application and budget.
-pub fn pool(sweeps: &[(String, Vec<Record>)]) -> (Vec<Record>, BTreeMap<(String, String, usize), String>) {
+pub fn pool(sweeps: &[(String, Vec<Record>)]) -> (Vec<Record>, Sources) {
     let mut cells: BTreeMap<Key, (&str, Vec<&Record>)> = BTreeMap::new();
     for (name, records) in sweeps {
         let mut here: BTreeMap<Key, Vec<&Record>> = BTreeMap::new();
@@ -37,7 +40,7 @@ pub fn pool(sweeps: &[(String, Vec<Record>)]) -> (Vec<Record>, BTreeMap<(String,
         }
     }
     let mut out = Vec::new();
-    let mut from = BTreeMap::new();
+    let mut from = Sources::new();
     for ((res, scene, app, caches), (name, rs)) in cells {
         let size = res.map_or("?".to_string(), |[w, h]| format!("{w}x{h}"));
         let scene = format!("{scene} {size}");

@@ -146,6 +146,14 @@ pub trait CacheOracle {
     fn predict_many(&mut self, asks: &[(CacheId, Vec<(CacheId, f32)>)]) -> Vec<Option<Prediction>> {
         vec![None; asks.len()]
     }
+    /// Shading (and [`CacheOracle::predict_many`]'s answers) from now on with about `keep` (0 < `keep` ≤ 1)
+    /// of the application's draws per sample, 1 restoring them: what a target error the caches already
+    /// beat is met with, where the application's error is its shading's noise. Returns whether shading
+    /// changed (the default: no application can).
+    fn thin(&mut self, keep: f32) -> bool {
+        let _ = keep;
+        false
+    }
 }
 
 /// What a cache's neighbours predict at its site ([`CacheOracle::predict_many`]), in the image's units (the

@@ -539,6 +539,24 @@ impl Application for ImportanceCache {
         best.1
     }
 
+    /// Shading with caches is unbiased, so its error is the noise of its draws: every letter of
+    /// `distributions` draws `keep` × `lightsamples` times, rounded up (at least once).
+    fn thinned(&self, keep: f32) -> Option<Self> {
+        let now = self.light_samples;
+        if self.sampling != Sampling::Cache || !(keep > 0.0 && keep < 1.0) {
+            return None;
+        }
+        let fewer = ((now as f32 * keep).ceil() as u32).clamp(1, now);
+        if fewer == now {
+            return None;
+        }
+        let mut thin = self.clone();
+        thin.light_samples = fewer;
+        // Each technique draws its letters' count times `lightsamples`.
+        thin.techniques = self.techniques.map(|d| d / now * fewer);
+        Some(thin)
+    }
+
     fn keep_lesson(&self, record: &mut ImportanceRecord, lesson: u8) {
         record.level = lesson;
     }

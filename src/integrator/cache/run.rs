@@ -64,6 +64,8 @@ const SUBPIXEL_KEY: u64 = 0x5355_4250_4958;
 struct Store<'a, 's, A: Application> {
     cx: &'a A::Prepared<'s>,
     app: &'a A,
+    /// `app` with fewer draws, once a target error the caches beat asked for it ([`CacheOracle::thin`]).
+    thin: Option<A>,
     g: &'a GBuffer,
     seed: u64,
     /// Sub-pixel samples per pixel (what a pixel's variance in [`Application::predict`] is over).
@@ -73,6 +75,13 @@ struct Store<'a, 's, A: Application> {
     eval_secs: f64,
     rays: RayCounters,
     bar: ProgressBar,
+}
+
+impl<A: Application> Store<'_, '_, A> {
+    /// The settings shading uses: the application's own, or fewer draws ([`CacheOracle::thin`]).
+    fn shading_app(&self) -> &A {
+        self.thin.as_ref().unwrap_or(self.app)
+    }
 }
 
 impl<A: Application> CacheOracle for Store<'_, '_, A> {
@@ -93,7 +102,7 @@ impl<A: Application> CacheOracle for Store<'_, '_, A> {
     }
 
     fn predict_many(&mut self, asks: &[(CacheId, Vec<(CacheId, f32)>)]) -> Vec<Option<Prediction>> {
-        let (cx, app, g, records, sites) = (self.cx, self.app, self.g, &self.records, &self.sites);
+        let (cx, app, g, records, sites) = (self.cx, self.shading_app(), self.g, &self.records, &self.sites);
         let subpixels = self.subpixels;
         let neighbour = |c: CacheId, weight: f32| {
             let sp = g.get(sites[c as usize])?;
@@ -117,6 +126,14 @@ impl<A: Application> CacheOracle for Store<'_, '_, A> {
                 })
             })
             .collect()
+    }
+
+    fn thin(&mut self, keep: f32) -> bool {
+        if keep >= 1.0 {
+            return self.thin.take().is_some();
+        }
+        self.thin = self.app.thinned(keep);
+        self.thin.is_some()
     }
 
     fn evaluate(&mut self, sites: &[PixelId]) {
@@ -198,6 +215,7 @@ pub fn render_cached<A: Application>(
     let mut store = Store {
         cx,
         app,
+        thin: None,
         g: &g,
         seed: s.seed,
         subpixels: s.subpixels.max(1),
@@ -209,10 +227,17 @@ pub fn render_cached<A: Application>(
     };
     let mut cache_points = Vec::new();
     let mut radii = Vec::new();
+    // The settings shading uses: `app`, or fewer draws where placement met a target error with them.
+    let thin;
+    let mut app = app;
     if let (Placement::Strategy(name), true) = (s.placement, g.valid_count > 0) {
         let strategy = registry::strategy(name)?;
         let total = budget(app, s, g.valid_count, &mut stats)?;
         discontinuity = place(&strategy, &mut store, total, s, &mut times, &mut stats)?;
+        if let Some(t) = store.thin.take() {
+            thin = t;
+            app = &thin;
+        }
         stage1 = store.sites[..stats.stage1_caches].to_vec();
         stage2 = store.sites[stats.stage1_caches..].to_vec();
         let t = Instant::now();
