@@ -54,6 +54,20 @@ pub struct Cell {
     pub loses_flip: bool,
 }
 
+impl Cell {
+    /// The cell's row in a newcomer's table ([`header`]'s columns).
+    pub fn row(&self) -> Vec<String> {
+        vec![
+            format!("{} {}", self.scene, self.application),
+            self.caches.to_string(),
+            format!("{} {:.5}", self.best.0, self.best.1),
+            self.vs_best.clone(),
+            self.vs_dgs.clone(),
+            self.flip_vs_im.clone(),
+        ]
+    }
+}
+
 /// The plain cache methods that are not one of [`PAPER`], sorted.
 pub fn newcomers(records: &[Record]) -> Vec<String> {
     let mut out: Vec<String> = Vec::new();
@@ -134,19 +148,7 @@ pub fn against_the_paper(records: &[Record]) -> Vec<Table> {
         if cells.is_empty() {
             continue;
         }
-        let mut rows: Vec<Vec<String>> = cells
-            .iter()
-            .map(|c| {
-                vec![
-                    format!("{} {}", c.scene, c.application),
-                    c.caches.to_string(),
-                    format!("{} {:.5}", c.best.0, c.best.1),
-                    c.vs_best.clone(),
-                    c.vs_dgs.clone(),
-                    c.flip_vs_im.clone(),
-                ]
-            })
-            .collect();
+        let mut rows: Vec<Vec<String>> = cells.iter().map(Cell::row).collect();
         rows.push(mean_row(format!("mean over {} cells", cells.len()), &cells));
         out.push(Table {
             title: format!("{m} against the paper's best"),

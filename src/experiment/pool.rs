@@ -81,15 +81,9 @@ pub fn tables(sweeps: &[(String, Vec<Record>)]) -> Vec<Table> {
             .iter()
             .map(|c| {
                 let sweep = from.get(&(c.scene.clone(), c.application.clone(), c.caches)).cloned().unwrap_or_default();
-                vec![
-                    sweep,
-                    format!("{} {}", c.scene, c.application),
-                    c.caches.to_string(),
-                    format!("{} {:.5}", c.best.0, c.best.1),
-                    c.vs_best.clone(),
-                    c.vs_dgs.clone(),
-                    c.flip_vs_im.clone(),
-                ]
+                let mut row = c.row();
+                row.insert(0, sweep);
+                row
             })
             .collect();
         out.push(Table {
