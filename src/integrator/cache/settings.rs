@@ -49,7 +49,7 @@ pub const REFINE_FLOOR: ParamDef<f64> = ParamDef::float(
 pub const TARGET_ERROR: ParamDef<f64> = ParamDef::computed(
     "targeterror",
     "none",
-    "refine: place caches until its own estimate of the relative RMSE against `none` is this (`caches` becomes a ceiling)",
+    "refine: place caches until its own estimate of the relative RMSE against `none` is this (`caches` becomes a ceiling); importance caching draws fewer lights when its first caches already beat it",
 )
 .valid(Valid::Positive { finite: true });
 /// `sigma_a`: VGC's σ_a (default from the cache density, chosen by the strategy).
