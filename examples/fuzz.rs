@@ -43,8 +43,8 @@ fn real_main() -> Result<ExitCode, String> {
     let mut max_inputs = None;
     let mut seed = 1u64;
     let mut out = None;
-    let mut timeout_ms = 5000u64;
-    let mut mem_mib = 1024usize;
+    let mut timeout_ms = 20_000u64;
+    let mut mem_mib = 2048usize;
     let mut slow_seed_ms = 500u64;
     let mut replay: Option<Vec<PathBuf>> = None;
     let mut replay_as = None;
@@ -92,6 +92,7 @@ fn real_main() -> Result<ExitCode, String> {
         timeout: Duration::from_millis(timeout_ms),
         mem_limit: mem_mib << 20,
         slow_seed: Duration::from_millis(slow_seed_ms),
+        big_seed: usize::MAX,
         progress_every: 60.0,
     };
     let r = engine::run(&cfg).map_err(|e| format!("{}: {e}", cfg.out.display()))?;

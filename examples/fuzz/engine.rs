@@ -36,6 +36,9 @@ pub struct Config {
     pub mem_limit: usize,
     /// Seeds that take longer than this to run once are left out.
     pub slow_seed: Duration,
+    /// Seeds whose heap grows by more than this many bytes while they run are left out. Unlike
+    /// `slow_seed`, this picks the same seeds on every machine (allocations do not depend on its speed).
+    pub big_seed: usize,
     /// Progress lines every this many seconds (0: none).
     pub progress_every: f64,
 }
@@ -49,7 +52,7 @@ pub struct Report {
     pub secs: f64,
     /// Seeds used, and left out as slow.
     pub seeds: usize,
-    /// Seeds left out because they were slow.
+    /// Seeds left out because they were slow or big.
     pub slow_seeds: usize,
     /// Corpus size at the end.
     pub corpus: usize,
@@ -65,11 +68,14 @@ pub struct Report {
     pub max_peak: usize,
     /// The longest time one input took.
     pub slowest: Duration,
+    /// The heap growth of the input that ran last, bytes.
+    pub last_peak: usize,
 }
 
 static STARTED_MS: AtomicU64 = AtomicU64::new(0);
 static EXECUTED: AtomicU64 = AtomicU64::new(0);
-static OUT: OnceLock<PathBuf> = OnceLock::new();
+/// The running target's `out` folder (a process may run several targets one after another).
+static OUT: Mutex<Option<PathBuf>> = Mutex::new(None);
 static PANIC_MSG: Mutex<Option<String>> = Mutex::new(None);
 
 fn clock() -> &'static Instant {
@@ -84,7 +90,8 @@ fn now_ms() -> u64 {
 /// Copies `<out>/current.bin` to `<out>/findings/<kind>-<n>.bin`, writes `why` next to it, and exits.
 fn fatal(kind: &str, why: &str) -> ! {
     let n = EXECUTED.load(Relaxed);
-    if let Some(out) = OUT.get() {
+    let out = OUT.lock().ok().and_then(|o| o.clone());
+    if let Some(out) = out {
         let dir = out.join("findings");
         let _ = std::fs::create_dir_all(&dir);
         let dest = dir.join(format!("{kind}-{n}.bin"));
@@ -161,7 +168,9 @@ struct Entry {
 /// Runs the fuzz loop as configured.
 pub fn run(cfg: &Config) -> std::io::Result<Report> {
     std::fs::create_dir_all(cfg.out.join("findings"))?;
-    let _ = OUT.set(cfg.out.clone());
+    if let Ok(mut o) = OUT.lock() {
+        *o = Some(cfg.out.clone());
+    }
     clock();
     TIMEOUT_MS.store(cfg.timeout.as_millis() as u64, Relaxed);
     // A current.bin left by a run that died (a crash the harness could not catch: stack overflow, abort).
@@ -211,7 +220,8 @@ pub fn run(cfg: &Config) -> std::io::Result<Report> {
         STARTED_MS.store(0, Relaxed);
         let took = start.elapsed();
         alloc::set_limit(usize::MAX);
-        report.max_peak = report.max_peak.max(alloc::peak().saturating_sub(base));
+        report.last_peak = alloc::peak().saturating_sub(base);
+        report.max_peak = report.max_peak.max(report.last_peak);
         report.slowest = report.slowest.max(took);
         report.inputs += 1;
         EXECUTED.store(report.inputs, Relaxed);
@@ -242,7 +252,7 @@ pub fn run(cfg: &Config) -> std::io::Result<Report> {
     for seed in all_seeds {
         let start = Instant::now();
         let sig = exec(&seed.data, &seed, &mut report);
-        if start.elapsed() > cfg.slow_seed {
+        if start.elapsed() > cfg.slow_seed || report.last_peak > cfg.big_seed {
             report.slow_seeds += 1;
             continue;
         }
