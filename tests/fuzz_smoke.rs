@@ -56,13 +56,15 @@ fn every_reader_survives_a_short_fuzz_run() {
         };
         let r = engine::run(&cfg).unwrap_or_else(|e| panic!("{}: {e}", out.display()));
         eprintln!(
-            "{}: {} inputs in {:.1} s from {} seeds, {} outcome kinds, largest heap growth {:.1} MiB",
+            "{}: {} inputs in {:.1} s from {} seeds, {} outcome kinds, largest heap growth {:.1} MiB, \
+             slowest input {:.0} ms",
             target.name(),
             r.inputs,
             r.secs,
             r.seeds,
             r.outcome_kinds,
-            r.max_peak as f64 / (1 << 20) as f64
+            r.max_peak as f64 / (1 << 20) as f64,
+            r.slowest.as_secs_f64() * 1e3
         );
         assert!(r.seeds > 0, "{}: no seeds", target.name());
         assert!(r.inputs > r.seeds as u64, "{}: no mutated input ran", target.name());
