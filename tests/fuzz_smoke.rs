@@ -20,7 +20,7 @@ static ALLOC: alloc::Counting = alloc::Counting;
 
 /// Inputs per target. The run is bounded by a count, not by time, so that every machine tries the same
 /// inputs (the mutation stream is fixed by the seed) and a finding here is a finding everywhere: about
-/// 25 s for the five targets on the 2-core CI machine.
+/// 15–22 s for the five targets on the 2-core CI machine.
 const INPUTS: u64 = 20_000;
 
 /// The heap one input may grow by, and how long it may run. A few bytes of scene text can legitimately
