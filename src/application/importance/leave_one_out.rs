@@ -7,8 +7,8 @@
 //! be the cache's own F value f_j (the luminance of its contribution with visibility, split VPLs left out).
 //! Its expectation drawing from the neighbours is Σ f_j over the VPLs some technique can draw ([`sampled`]: a
 //! VPL no technique reaches, without C, is lost), and one sample's variance with independent draws, for the
-//! balance heuristic with n_t draws of technique t (density p_t, the uniform mixture over the neighbours'
-//! distributions), is
+//! balance heuristic with n_t draws of technique t (density p_t, the mixture over the neighbours'
+//! distributions, uniform or weighted as shading mixes them: [`super::mixture`]), is
 //!
 //! Var = Σ_j f_j² / D_j − Σ_t n_t μ_t²,  D_j = Σ_t n_t p_t(j),  μ_t = Σ_j p_t(j) f_j / D_j
 //!
@@ -28,7 +28,7 @@
 //! Depends on the record's distributions, the mixture and the sampling streams only.
 
 use super::distribution::Quantised;
-use super::mixture::{CONSERVATIVE, Mis, Mixture, TECHNIQUES};
+use super::mixture::{Blend, CONSERVATIVE, Mis, Mixture, TECHNIQUES};
 use crate::sampling::{Rng, Stratum};
 
 /// VPLs drawn from a cache's own F to estimate the sums over every VPL.
@@ -53,18 +53,26 @@ pub(super) struct Sampled {
 }
 
 /// The estimator at the site of a cache whose F is `own`, drawing `draws[t]` samples of each technique t from
-/// the mixtures of `near`'s distributions (F, U, B; B stood in for by U where it is not made yet) and C
-/// uniformly over `vpls` VPLs (module doc); G draws nothing here.
+/// the mixtures (by `blend`, each neighbour with its weight) of `near`'s distributions (F, U, B; B stood in
+/// for by U where it is not made yet) and C uniformly over `vpls` VPLs (module doc); G draws nothing here.
 pub(super) fn sampled<'a>(
     own: &Quantised,
-    near: impl Iterator<Item = &'a [Option<Quantised>; 3]> + Clone,
+    blend: Blend,
+    near: impl Iterator<Item = (&'a [Option<Quantised>; 3], f32)> + Clone,
     draws: [u32; TECHNIQUES],
     vpls: usize,
 ) -> Sampled {
-    // Each stored technique's distributions among the neighbours (B: U where B is not made yet).
-    let stored =
-        |t: usize| near.clone().filter_map(move |d| d[t].as_ref().or(if t == 2 { d[1].as_ref() } else { None }));
+    // Each stored technique's distributions among the neighbours (B: U where B is not made yet), with their
+    // weights in the mixture.
+    let weighted = blend == Blend::Weighted;
+    let stored = |t: usize| {
+        near.clone().filter_map(move |(d, w)| {
+            let q = d[t].as_ref().or(if t == 2 { d[1].as_ref() } else { None })?;
+            Some((q, if weighted { w as f64 } else { 1.0 }))
+        })
+    };
     let counts: [usize; 3] = std::array::from_fn(|t| stored(t).count());
+    let sums: [f64; 3] = std::array::from_fn(|t| stored(t).map(|(_, w)| w).sum());
     // n_t of the techniques that can draw: F, U and B where a neighbour has the distribution, C always.
     let n: [f64; 4] = std::array::from_fn(|t| {
         let can = if t == CONSERVATIVE { vpls > 0 } else { counts[t] > 0 };
@@ -79,7 +87,7 @@ pub(super) fn sampled<'a>(
         let p: [f64; 4] = std::array::from_fn(|t| match t {
             CONSERVATIVE => 1.0 / vpls.max(1) as f64,
             _ if counts[t] == 0 => 0.0,
-            _ => stored(t).map(|q| q.pdf(j) as f64).sum::<f64>() / counts[t] as f64,
+            _ => stored(t).map(|(q, w)| w * q.pdf(j) as f64).sum::<f64>() / sums[t],
         });
         let d: f64 = (0..4).map(|t| n[t] * p[t]).sum();
         if d <= 0.0 {
@@ -100,14 +108,15 @@ pub(super) fn sampled<'a>(
 
 /// The variance of a pixel's value (the mean of its `samples` sub-pixel samples) at the site of a cache whose
 /// F is `own`, each sample shading from the distributions `near` (F, U, B; B stood in for by U where it is
-/// not made yet) with `draws[t]` draws of technique t, stratified across the samples as shading stratifies
-/// them, combined by `mis`: the sample variance of [`REPLICAS`] runs of the estimator (module doc), their
-/// random streams keyed by `key`.
+/// not made yet; each with its weight in the mixture by `blend`) with `draws[t]` draws of technique t,
+/// stratified across the samples as shading stratifies them, combined by `mis`: the sample variance of
+/// [`REPLICAS`] runs of the estimator (module doc), their random streams keyed by `key`.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn pixel_variance(
     key: u64,
     own: &Quantised,
-    near: &[&[Option<Quantised>; 3]],
+    blend: Blend,
+    near: &[(&[Option<Quantised>; 3], f32)],
     draws: [u32; TECHNIQUES],
     vpls: usize,
     mis: Mis,
@@ -115,8 +124,8 @@ pub(super) fn pixel_variance(
 ) -> f32 {
     // B where it is made, else U (cloned: the mixture reads the three distributions of a record together).
     let dists: Vec<[Option<Quantised>; 3]> =
-        near.iter().map(|d| [d[0].clone(), d[1].clone(), d[2].clone().or_else(|| d[1].clone())]).collect();
-    let mix = Mixture::new(dists.iter(), draws, vpls, None);
+        near.iter().map(|(d, _)| [d[0].clone(), d[1].clone(), d[2].clone().or_else(|| d[1].clone())]).collect();
+    let mix = Mixture::new(dists.iter().zip(near.iter().map(|&(_, w)| w)), blend, draws, vpls, None);
     let samples = samples.max(1);
     let runs: Vec<f64> = (0..REPLICAS)
         .map(|r| {
@@ -141,7 +150,7 @@ pub(super) fn pixel_variance(
 
 #[cfg(test)]
 mod tests {
-    use super::super::mixture::{Mis, Mixture};
+    use super::super::mixture::{Blend, Mis, Mixture};
     use super::*;
     use crate::sampling::Rng;
 
@@ -154,10 +163,12 @@ mod tests {
     fn simulated(
         f: &[f32],
         near: &'static [[Option<Quantised>; 3]],
+        weights: &[f32],
+        blend: Blend,
         draws: [u32; TECHNIQUES],
         runs: usize,
     ) -> (f64, f64) {
-        let m = Mixture::new(near.iter(), draws, f.len(), None);
+        let m = Mixture::new(near.iter().zip(weights.iter().copied()), blend, draws, f.len(), None);
         let mut rng = Rng::new(7);
         let (mut sum, mut sum2) = (0f64, 0f64);
         for _ in 0..runs {
@@ -188,14 +199,23 @@ mod tests {
         let near: &'static [[Option<Quantised>; 3]] =
             Box::leak(vec![[q(&half), q(&wide), None], [q(&fq), q(&wide), None]].into_boxed_slice());
         let draws = [2, 1, 0, 1, 0];
-        let got = sampled(&own, near.iter(), draws, n);
-        let (mean, var) = simulated(&fq, near, draws, 400_000);
-        assert!((got.expected as f64 - mean).abs() < 0.01 * mean, "{got:?} vs mean {mean}");
-        assert!((got.variance as f64 / var - 1.0).abs() < 0.08, "{got:?} vs variance {var}");
+        // Uniform, and weighted toward the neighbour that sees the cache's light whole, and away from it.
+        let mut variances = vec![];
+        for (weights, blend) in
+            [([1.0, 1.0], Blend::Uniform), ([1.0, 3.0], Blend::Weighted), ([3.0, 1.0], Blend::Weighted)]
+        {
+            let got = sampled(&own, blend, near.iter().zip(weights), draws, n);
+            let (mean, var) = simulated(&fq, near, &weights, blend, draws, 400_000);
+            assert!((got.expected as f64 - mean).abs() < 0.01 * mean, "{weights:?}: {got:?} vs mean {mean}");
+            assert!((got.variance as f64 / var - 1.0).abs() < 0.08, "{weights:?}: {got:?} vs variance {var}");
+            variances.push(got.variance);
+        }
+        assert!(variances[1] < variances[0] && variances[0] < variances[2], "{variances:?}");
+        let got = sampled(&own, Blend::Uniform, near.iter().map(|d| (d, 1.0)), draws, n);
         // From its own F (and the same U) the variance is less than half the neighbours'.
         let alone: &'static [[Option<Quantised>; 3]] = Box::leak(vec![[q(&fq), q(&wide), None]].into_boxed_slice());
-        let own_var = sampled(&own, alone.iter(), draws, n).variance;
-        let (_, simulated_own) = simulated(&fq, alone, draws, 400_000);
+        let own_var = sampled(&own, Blend::Uniform, alone.iter().map(|d| (d, 1.0)), draws, n).variance;
+        let (_, simulated_own) = simulated(&fq, alone, &[1.0], Blend::Uniform, draws, 400_000);
         assert!((own_var as f64 / simulated_own - 1.0).abs() < 0.08, "{own_var} vs {simulated_own}");
         assert!(own_var < 0.5 * got.variance, "{own_var} vs {}", got.variance);
     }
@@ -208,20 +228,22 @@ mod tests {
         let half: Vec<f32> = (0..n).map(|j| if j < 32 { own.value(j) } else { 0.0 }).collect();
         let wide: Vec<f32> = (0..n).map(|j| if j < 128 { 1.0 } else { 0.0 }).collect();
         let near = [[q(&half), q(&wide), None], [q(&f), q(&wide), None]];
-        let refs: Vec<&[Option<Quantised>; 3]> = near.iter().collect();
+        let refs: Vec<(&[Option<Quantised>; 3], f32)> = near.iter().map(|d| (d, 1.0)).collect();
         // The mean over many keys of the runs' sample variance is the variance (it is unbiased).
         let mean_over_keys = |draws: [u32; TECHNIQUES], samples: u32| {
-            (0..2000u64).map(|k| pixel_variance(k, &own, &refs, draws, n, Mis::Balance, samples) as f64).sum::<f64>()
+            (0..2000u64)
+                .map(|k| pixel_variance(k, &own, Blend::Uniform, &refs, draws, n, Mis::Balance, samples) as f64)
+                .sum::<f64>()
                 / 2000.0
         };
         // One sample, one draw per technique (B stood in for by U): nothing to stratify.
         let one = [1, 1, 1, 1, 0];
-        let analytic = sampled(&own, near.iter(), one, n).variance as f64;
+        let analytic = sampled(&own, Blend::Uniform, refs.iter().copied(), one, n).variance as f64;
         let simulated = mean_over_keys(one, 1);
         assert!((simulated / analytic - 1.0).abs() < 0.1, "{simulated} vs {analytic}");
         // Four samples of eight draws each: the strata take much of the variance of independent draws.
         let eight = [8, 8, 8, 8, 0];
-        let independent = sampled(&own, near.iter(), eight, n).variance as f64 / 4.0;
+        let independent = sampled(&own, Blend::Uniform, refs.iter().copied(), eight, n).variance as f64 / 4.0;
         let stratified = mean_over_keys(eight, 4);
         assert!(stratified < 0.5 * independent, "{stratified} vs {independent}");
     }
@@ -232,9 +254,9 @@ mod tests {
         let own = Quantised::new(&f).unwrap();
         let near: &'static [[Option<Quantised>; 3]] =
             Box::leak(vec![[q(&[1.0, 1.0, 0.0, 0.0]), None, None]].into_boxed_slice());
-        let got = sampled(&own, near.iter(), [1, 0, 0, 0, 0], 4);
+        let got = sampled(&own, Blend::Weighted, near.iter().map(|d| (d, 0.5)), [1, 0, 0, 0, 0], 4);
         assert!((got.total - 4.0).abs() < 0.05 && (got.expected - 2.0).abs() < 0.05, "{got:?}");
-        let (mean, _) = simulated(&f, near, [1, 0, 0, 0, 0], 10_000);
+        let (mean, _) = simulated(&f, near, &[0.5], Blend::Weighted, [1, 0, 0, 0, 0], 10_000);
         assert!((mean - got.expected as f64).abs() < 0.05, "{mean}");
     }
 }

@@ -137,6 +137,15 @@ pub const SHARELEVEL: Choice<ShareLevel> = Choice::new(
      of them)",
 );
 
+/// `mixweight`: the power of the interpolation weight by which the selected caches are mixed.
+pub const MIXWEIGHT: ParamDef<f64> = ParamDef::float(
+    "mixweight",
+    1.0,
+    "a shading point draws from each selected cache in proportion to its interpolation weight 1/Dist (Eq. 5) \
+     to this power (0: every cache alike, the uniform mixture of ALGORITHMS.md 6.3)",
+)
+.between(0.0, 8.0, "");
+
 /// The table, in its page's order.
 pub const PARAMETERS: &[Parameter] = &[
     VPLS.row,
@@ -156,6 +165,7 @@ pub const PARAMETERS: &[Parameter] = &[
     STRATIFY.row,
     LEARNSHARES.row,
     SHARELEVEL.row,
+    MIXWEIGHT.row,
 ];
 
 impl ImportanceCache {
@@ -179,6 +189,7 @@ impl ImportanceCache {
             stratify: p.get(&STRATIFY)?,
             learn_shares: p.get(&LEARNSHARES)? as u32,
             share_level: p.choice(&SHARELEVEL)?,
+            mix_weight: p.get(&MIXWEIGHT)? as f32,
             vis_angle: vis_angle as f32,
             split_cone: split_cone as f32,
             split_near: split_near as f32,
@@ -217,6 +228,7 @@ impl ImportanceCache {
             ("stratify", self.stratify.into()),
             ("learnshares", self.learn_shares.into()),
             ("sharelevel", self.share_level.name().into()),
+            ("mixweight", number(self.mix_weight)),
         ]
     }
 
