@@ -11,8 +11,9 @@
 //! [`DEFAULT_LIGHT_SAMPLES`]; ALGORITHMS.md §6.3 and the paper: one each), a count after a letter repeating
 //! it, with halvings of U's and B's draws in favour of F that each cache learns from how well its neighbours
 //! sample its own light (`learnshares`, default 2; [`ImportanceCache::shares`]), each the mixture of its
-//! selected caches' distributions, and combines them by multiple importance sampling ([`mixture`]): the
-//! balance heuristic by default, α-max as an option. Every draw costs one shadow ray.
+//! selected caches' distributions — weighted by their interpolation weights (`mixweight`; beyond
+//! ALGORITHMS.md §6.3, whose mixture is uniform) — and combines them by multiple importance sampling
+//! ([`mixture`]): the balance heuristic by default, α-max as an option. Every draw costs one shadow ray.
 //! The positions the draws take in the distributions are stratified across the pixel's sub-pixel samples
 //! ([`Stratum`], parameter `stratify`) — a choice beyond ALGORITHMS.md §6.3, which draws each sample
 //! independently: every draw alone is distributed as before, so the estimator is unchanged in expectation,
