@@ -68,7 +68,8 @@ pub(super) fn sampled<'a>(
     let stored = |t: usize| {
         near.clone().filter_map(move |(d, w)| {
             let q = d[t].as_ref().or(if t == 2 { d[1].as_ref() } else { None })?;
-            Some((q, if weighted { w as f64 } else { 1.0 }))
+            let w = if weighted { w as f64 } else { 1.0 };
+            (w > 0.0).then_some((q, w))
         })
     };
     let counts: [usize; 3] = std::array::from_fn(|t| stored(t).count());

@@ -2,8 +2,7 @@
 //! (ALGORITHMS.md §6.3, "bilateral MIS") — the four techniques F (full, with visibility), U (unoccluded),
 //! B (bounded over the cache's region) and C (conservative: uniform over all VPLs), each of F, U and B the
 //! mixture of its distribution over the selected caches whose distribution is not all zero, n_t draws of
-//! technique t
-//! (one each by default), combined by the balance heuristic over the draw counts (Veach's multi-sample MIS: a
+//! technique t (one each by default), combined by the balance heuristic over the draw counts (Veach's multi-sample MIS: a
 //! draw of VPL j counts I_j / Σ_t n_t·p_t(j)) or Georgiev's α-max heuristic (α = 1: the technique with the
 //! largest n_t·p_t(j) takes the draw, weighted 1 / (n_t·p_t(j))).
 //!
@@ -60,12 +59,19 @@ pub enum Blend {
     Weighted,
 }
 
+/// A cache's weight in a mixture blended by `blend`, `w` the weight its caller gave it.
+#[inline]
+fn blended(blend: Blend, w: f32) -> f32 {
+    if blend == Blend::Weighted { w } else { 1.0 }
+}
+
 /// The stored distributions (F, U, B) of the selected caches, and the shading point's lobe, as the shading
 /// point sees them.
 pub struct Mixture<'l, I> {
     /// The caches' distributions, each with its weight in the mixture.
     caches: I,
-    /// Selected caches whose distribution of each stored technique is not all zero.
+    /// Selected caches whose distribution of each stored technique is not all zero (and whose weight is
+    /// not 0).
     counts: [u32; 3],
     /// The sum of those caches' weights (their count when the blend is uniform).
     sums: [f32; 3],
@@ -79,28 +85,22 @@ impl<'a, 'l, I> Mixture<'l, I>
 where
     I: Iterator<Item = (&'a [Option<Quantised>; 3], f32)> + Clone,
 {
-    /// The mixture over `caches` (their F, U, B distributions, each with its weight, finite and > 0, read
-    /// only when `blend` is [`Blend::Weighted`]) and the shading point's `lobe` of the techniques, technique
+    /// The mixture over `caches` (their F, U, B distributions, each with its weight, finite and ≥ 0, read
+    /// only when `blend` is [`Blend::Weighted`]; a cache of weight 0 takes no part) and the shading point's `lobe` of the techniques, technique
     /// t drawing `draws[t]` samples (0: not used), over `vpls` VPLs.
     pub fn new(caches: I, blend: Blend, draws: [u32; TECHNIQUES], vpls: usize, lobe: Option<Lobe<'l>>) -> Self {
         let mut counts = [0u32; 3];
         let mut sums = [0f32; 3];
         for (d, w) in caches.clone() {
-            let w = if blend == Blend::Weighted { w } else { 1.0 };
+            let w = blended(blend, w);
             for t in 0..3 {
-                if d[t].is_some() {
+                if d[t].is_some() && w > 0.0 {
                     counts[t] += 1;
                     sums[t] += w;
                 }
             }
         }
         Mixture { caches, counts, sums, blend, draws, vpls, lobe }
-    }
-
-    /// Cache k's weight in the mixture.
-    #[inline]
-    fn weight(&self, w: f32) -> f32 {
-        if self.blend == Blend::Weighted { w } else { 1.0 }
     }
 
     /// Whether technique `t` draws samples.
@@ -134,13 +134,13 @@ where
             return lobe.pdf(j);
         }
         // With a uniform blend every weight is 1 and the sum is the count: the products are exact.
-        let sum: f32 = self.caches.clone().filter_map(|(d, w)| Some(self.weight(w) * d[t].as_ref()?.pdf(j))).sum();
+        let sum: f32 =
+            self.caches.clone().filter_map(|(d, w)| Some(blended(self.blend, w) * d[t].as_ref()?.pdf(j))).sum();
         sum / self.sums[t]
     }
 
     /// Draw `d` of technique `t`: a cache chosen among those that can draw (with `rng`: uniformly, or by
-    /// weight), then a
-    /// VPL from its distribution at 64 uniform bits `u` (C: the VPL at `u` directly), or, when `u` is
+    /// weight), then a VPL from its distribution at 64 uniform bits `u` (C: the VPL at `u` directly), or, when `u` is
     /// `None`, at bits drawn from `rng`; for G the VPL its draw `d` chose when the lobe was made (from the
     /// bits it was given); `None` for an inactive technique.
     #[inline]
@@ -167,6 +167,9 @@ where
                 let mut target = (rng.next_u64() >> 40) as f32 * (1.0 / (1u32 << 24) as f32) * self.sums[t];
                 let mut chosen = None;
                 for (q, w) in self.caches.clone().filter_map(|(d, w)| Some((d[t].as_ref()?, w))) {
+                    if w <= 0.0 {
+                        continue;
+                    }
                     chosen = Some(q);
                     if target < w {
                         break;
@@ -307,5 +310,20 @@ mod tests {
             assert_eq!(m.sample(0, 0, None, &mut Rng::new(1)), None);
             assert_eq!(m.pdf(1, 0), 0.0);
         }
+    }
+
+    #[test]
+    fn a_cache_of_weight_zero_takes_no_part() {
+        // Cache 0 weighs nothing (its weight underflowed); only it has an F: F draws nothing and no density is
+        // NaN. U is cache 1's alone.
+        let q = |w: &[f32]| Quantised::new(w);
+        let d: &'static [[Option<Quantised>; 3]] =
+            Box::leak(vec![[q(&[1.0, 0.0]), q(&[1.0, 0.0]), None], [None, q(&[0.0, 1.0]), None]].into_boxed_slice());
+        let m = Mixture::new(d.iter().zip([0.0, 2.0]), Blend::Weighted, [1; TECHNIQUES], 2, None);
+        assert!(!m.active(0) && m.active(1));
+        assert_eq!((m.pdf(1, 0), m.pdf(1, 1)), (0.0, 1.0));
+        let mut rng = Rng::new(5);
+        assert!((0..1000).all(|_| m.sample(1, 0, None, &mut rng) == Some(1)));
+        assert!((0..2).all(|j| (0..TECHNIQUES).all(|t| m.factor(t, j, Mis::Balance).is_finite())));
     }
 }

@@ -254,15 +254,8 @@ impl ImportanceCache {
         &self,
         near: &'n [Neighbour<'_, ImportanceRecord>],
     ) -> impl Iterator<Item = (&'n [Option<Quantised>; 3], f32)> + Clone + use<'n, '_> {
-        let power = self.mix_weight;
-        near.iter().map(move |c| {
-            let w = match power {
-                0.0 | 1.0 => c.weight,
-                2.0 => c.weight * c.weight,
-                p => c.weight.powf(p),
-            };
-            (&c.record.dists, w)
-        })
+        let (power, largest) = (self.mix_weight, near.iter().map(|c| c.weight).fold(0.0, f32::max));
+        near.iter().map(move |c| (&c.record.dists, mix_weight(c.weight, largest, power)))
     }
 
     /// The draws of each technique at level `level`: U and B each halved `level` times (rounded down, and at
@@ -707,6 +700,14 @@ impl Application for ImportanceCache {
     }
 }
 
+/// A cache's weight in the mixture from its interpolation weight `w`, the largest of its selection's
+/// `largest`, and `mixweight` `power`: `w` itself at power 1 (0: the blend is uniform and ignores it), else
+/// (w / largest)^power, which is in (0, 1] and cannot overflow however close a cache is (1/Dist reaches
+/// 10⁷/L) or large the power; only the ratios of the weights matter to the mixture.
+fn mix_weight(w: f32, largest: f32, power: f32) -> f32 {
+    if power == 0.0 || power == 1.0 || largest <= 0.0 { w } else { (w / largest).powf(power) }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -761,5 +762,18 @@ mod tests {
     fn the_parameter_table_gives_the_default_light_samples() {
         let row = ImportanceCache::PARAMETERS.iter().find(|p| p.name == "lightsamples").unwrap();
         assert_eq!(row.default.to_string(), DEFAULT_LIGHT_SAMPLES.to_string());
+    }
+
+    #[test]
+    fn mixture_weights_keep_their_ratios_and_do_not_overflow() {
+        assert_eq!(mix_weight(3.5, 7.0, 1.0), 3.5, "power 1 is the interpolation weight itself");
+        assert_eq!(mix_weight(7.0, 7.0, 2.0), 1.0);
+        assert!((mix_weight(3.5, 7.0, 2.0) - 0.25).abs() < 1e-7);
+        // A cache at 1e-7 of the scene's length from the point weighs 1e7 / L; to the eighth power that is
+        // far beyond f32, but as a ratio to the largest it stays in [0, 1].
+        for w in [1e7f32, 1e3, 1.0, 1e-3] {
+            let m = mix_weight(w, 1e7, 8.0);
+            assert!(m.is_finite() && (0.0..=1.0).contains(&m), "{w}: {m}");
+        }
     }
 }
