@@ -248,13 +248,16 @@ impl ImportanceCache {
     /// which ALGORITHMS.md §6.3 left open and read as a uniform mixture. Measured against that at equal
     /// draws (experiments/notes/importance-tried.md, "The caches mixed by their weights"): power 1 gave
     /// sibenik at 640×360 a 1.045× lower RMSE over three seeds, where power 2 gave 1.027× (and 4 was worse
-    /// than uniform); the Cornell box 1.043× (power 2: 1.068×); the bathroom 1.016× (power 2: 1.015×);
+    /// than uniform); the Cornell box 1.043× (power 2: 1.069×); the bathroom 1.016× (power 2: 1.015×);
     /// HDR-FLIP 2.5–7 % lower. Sibenik is the scene furthest from issue 44's goal, so the default is 1.
     fn mixed<'n>(
         &self,
         near: &'n [Neighbour<'_, ImportanceRecord>],
     ) -> impl Iterator<Item = (&'n [Option<Quantised>; 3], f32)> + Clone + use<'n, '_> {
-        let (power, largest) = (self.mix_weight, near.iter().map(|c| c.weight).fold(0.0, f32::max));
+        let power = self.mix_weight;
+        // The largest weight is needed only to take other powers as ratios (not at the default, 1).
+        let largest =
+            if power == 0.0 || power == 1.0 { 1.0 } else { near.iter().map(|c| c.weight).fold(0.0, f32::max) };
         near.iter().map(move |c| (&c.record.dists, mix_weight(c.weight, largest, power)))
     }
 
@@ -702,8 +705,9 @@ impl Application for ImportanceCache {
 
 /// A cache's weight in the mixture from its interpolation weight `w`, the largest of its selection's
 /// `largest`, and `mixweight` `power`: `w` itself at power 1 (0: the blend is uniform and ignores it), else
-/// (w / largest)^power, which is in (0, 1] and cannot overflow however close a cache is (1/Dist reaches
-/// 10⁷/L) or large the power; only the ratios of the weights matter to the mixture.
+/// (w / largest)^power, which is in [0, 1] (0 where it underflows: the mixture leaves such a cache out) and
+/// cannot overflow however close a cache is (1/Dist reaches 10⁷/L) or large the power; only the ratios of the
+/// weights matter to the mixture.
 fn mix_weight(w: f32, largest: f32, power: f32) -> f32 {
     if power == 0.0 || power == 1.0 || largest <= 0.0 { w } else { (w / largest).powf(power) }
 }
