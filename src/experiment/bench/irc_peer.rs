@@ -81,6 +81,9 @@ fn v2_series(minweight: f32, nsamples: u32) -> String {
 const BUDGETS: [usize; 6] = [1000, 2000, 3000, 3500, 4000, 8000];
 /// A budget that sets no `caches`: the integrator's default.
 const DEFAULT_BUDGET: usize = 0;
+/// The budgets of the 16² series (vgc+dgs and refine): from a few hundred caches, cheaper than pbrt-v2's
+/// cheapest setting, to 32000.
+const BUDGETS_16: [usize; 7] = [500, 1000, 2000, 4000, 8000, 16000, 32000];
 /// The paper's gathering grid side (64² = 4096 paths per cache, as pbrt-v2's default `nsamples`).
 const PAPER_GATHER: u32 = 64;
 /// One cachert series: a placement over cache budgets, at a gathering grid (`None`: the integrator's
@@ -103,11 +106,11 @@ const CACHERT_SERIES: [CachertSeries; 10] = [
     CachertSeries { placement: "im", gather: Some(PAPER_GATHER), budgets: &BUDGETS },
     CachertSeries { placement: "sd", gather: Some(PAPER_GATHER), budgets: &BUDGETS },
     CachertSeries { placement: "vgc+dgs", gather: Some(32), budgets: &[500, 1000, 2000, 4000, 8000, 16000] },
-    CachertSeries { placement: "vgc+dgs", gather: Some(16), budgets: &[500, 1000, 2000, 4000, 8000, 16000, 32000] },
+    CachertSeries { placement: "vgc+dgs", gather: Some(16), budgets: &BUDGETS_16 },
     CachertSeries { placement: "vgc+dgs", gather: Some(8), budgets: &[1000, 2000, 4000, 8000, 16000] },
     CachertSeries { placement: "vgc+dgs", gather: None, budgets: &[DEFAULT_BUDGET] },
     CachertSeries { placement: "refine", gather: Some(PAPER_GATHER), budgets: &BUDGETS },
-    CachertSeries { placement: "refine", gather: Some(16), budgets: &[500, 1000, 2000, 4000, 8000, 16000, 32000] },
+    CachertSeries { placement: "refine", gather: Some(16), budgets: &BUDGETS_16 },
 ];
 
 impl CachertSeries {
