@@ -81,6 +81,25 @@ fn shadowed_floor(res: u32) -> String {
     )
 }
 
+/// A mirror ahead of the camera that shows a matte wall behind it: the camera sees the wall only in the
+/// mirror, so no cache (caches sit where the camera looks first) serves it, and importance caching shades it
+/// by power sampling with `fallbackdraws` draws. The floor the camera sees directly is shaded from caches.
+fn mirror_and_a_wall_behind(res: u32) -> String {
+    format!(
+        "LookAt 0 1.2 -1  0 0.9 2  0 1 0\nCamera \"perspective\" \"float fov\" 60\n\
+         Film \"image\" \"integer xresolution\" {res} \"integer yresolution\" {res}\n\
+         WorldBegin\nMaterial \"matte\" \"rgb Kd\" [0.6 0.5 0.4]\n\
+         Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-4 0 -4  4 0 -4  4 0 2  -4 0 2]\n\
+         Material \"matte\" \"rgb Kd\" [0.2 0.5 0.7]\n\
+         Shape \"trianglemesh\" \"integer indices\" [0 2 1 0 3 2] \"point P\" [-4 0 -3  4 0 -3  4 3 -3  -4 3 -3]\n\
+         Material \"mirror\"\n\
+         Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-4 0.5 2  4 0.5 2  4 3 2  -4 3 2]\n\
+         AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [6 6 6]\n\
+         Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-0.5 2.8 -0.5  0.5 2.8 -0.5  0.5 2.8 0.5  -0.5 2.8 0.5]\n\
+         AttributeEnd\nWorldEnd\n"
+    )
+}
+
 /// Per-quadrant means of `im` (channels averaged).
 fn quadrants(im: &Image) -> [f64; 4] {
     let (w, h) = (im.width, im.height);
@@ -705,4 +724,31 @@ fn vpls_on_a_mesh_with_shading_normals_reflect_as_pbrt_v3_does() {
     let dev = ours / mean(&reference) - 1.0;
     eprintln!("octahedron: importancecache {:+.2} % against pbrt-v3 path maxdepth 2", 100.0 * dev);
     assert!(dev.abs() < 0.01, "{dev}");
+}
+
+#[test]
+fn a_wall_seen_only_in_a_mirror_is_shaded_by_the_fallback_draws_without_bias() {
+    let loaded = loaded_text(&mirror_and_a_wall_behind(24));
+    let base = [("vpls", "256"), ("caches", "12"), ("subpixels", "4")];
+    let run = |extra: &[(&str, &str)]| {
+        let set: Vec<_> = base.iter().chain(extra).copied().collect();
+        render_with(&loaded, &set, 3, None).unwrap_or_else(|e| panic!("{extra:?}: {e}"))
+    };
+    // The wall is shaded by the fallback: vertices after the mirror that no cache serves.
+    let default = run(&[]);
+    let paths = default.cache.as_ref().unwrap().stats.camera_paths;
+    assert!(paths.by_estimator > 100, "{paths:?}");
+    // The default draws four times a baseline sample's 32 there, and the count is what `fallbackdraws` sets.
+    let (four, once) = (run(&[("fallbackdraws", "128")]), run(&[("fallbackdraws", "32")]));
+    assert_eq!(default.image.pixels, four.image.pixels);
+    assert!(four.rays.shadow > once.rays.shadow, "{:?} {:?}", four.rays, once.rays);
+    assert_ne!(four.image.pixels, once.image.pixels);
+    // Unbiased for the same VPL sum, with the default draws and with few.
+    let r = reference(&loaded, &base);
+    assert_each_unbiased(
+        &loaded,
+        &base,
+        &[[("fallbackdraws", "0"), ("mis", "balance")], [("fallbackdraws", "2"), ("mis", "balance")]],
+        &r,
+    );
 }

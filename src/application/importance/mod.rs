@@ -79,6 +79,15 @@ const STREAM_BASELINE: u64 = 16;
 /// `lightsamples`; F, U, B and C may make more ([`params`]).
 const MAX_TECHNIQUE_DRAWS: u32 = lobe::MAX_DRAWS as u32;
 
+/// A vertex no cache serves (seen in a mirror or through glass) draws this many times as many VPLs by flux
+/// as a baseline sample would ([`ImportanceCache::fallback_draws`]). Such a vertex has no caches' light to
+/// draw by, and power sampling's variance per draw is many times importance caching's, so with the same
+/// draws those few vertices held much of a scene's error. Spending draws where they lower the error most,
+/// n draws of variance V_p each against m of V_i at costs c_p and c_i per draw, asks n / m =
+/// √(V_p c_i / (V_i c_p)), about 4–6 with the equal-draw RMSE ratios of 3.3–5.3 measured against power
+/// sampling; experiments/notes/importance-tried.md ("Vertices no cache serves") has the bathroom's sweep.
+const FALLBACK_FACTOR: u32 = 4;
+
 /// Default of `lightsamples`: the draws each letter of `distributions` makes per sub-pixel sample.
 /// ALGORITHMS.md §6.3 (after the paper) draws one per technique, four light samples per shading point; we
 /// draw eight per technique. A shading point's fixed work (its camera ray, the search for its caches, the
@@ -155,6 +164,9 @@ pub struct ImportanceCache {
     pub sampling: Sampling,
     /// VPLs a baseline draws per sample (0: one per enabled technique).
     pub draws: u32,
+    /// VPLs drawn by flux at a vertex no cache serves (`fallbackdraws`; 0: [`FALLBACK_FACTOR`] times
+    /// [`ImportanceCache::baseline_draws`]; [`Application::estimate`]).
+    pub fallback_draws: u32,
     /// Widest sharp-lobe cone summed apart at the shading point, degrees (0: no cones; [`split`]).
     pub split_cone: f32,
     /// Radius of the ball around the shading point whose VPLs are summed apart, in units of d_c (0: no
@@ -235,6 +247,12 @@ impl ImportanceCache {
     /// (G draws only at some shading points). Also the split's shadow rays under importance caching.
     fn baseline_draws(&self) -> u32 {
         if self.draws > 0 { self.draws } else { self.techniques[..LOBE].iter().sum() }
+    }
+
+    /// VPLs drawn by flux at a vertex no cache serves: `fallbackdraws`, or [`FALLBACK_FACTOR`] times
+    /// [`ImportanceCache::baseline_draws`].
+    fn fallback_draws(&self) -> u32 {
+        if self.fallback_draws > 0 { self.fallback_draws } else { FALLBACK_FACTOR * self.baseline_draws() }
     }
 
     /// How a shading point mixes its caches: by weight unless `mixweight` is 0.
@@ -329,19 +347,20 @@ impl ImportanceCache {
             .collect()
     }
 
-    /// The per-sample baselines: [`ImportanceCache::baseline_draws`] VPLs drawn uniformly or by flux
-    /// (`sampling`), averaged.
+    /// The per-sample baselines: `k` VPLs drawn uniformly or by flux (`sampling`), averaged.
+    #[allow(clippy::too_many_arguments)]
     fn baseline(
         &self,
         cx: &Lit<'_>,
         x: &Receiver,
         sampling: Sampling,
+        k: u32,
         rng: &mut Rng,
         stratum: Stratum,
         rays: &mut RayCounters,
     ) -> Spectrum {
         let n = cx.vpls.len();
-        let k = self.baseline_draws().max(1);
+        let k = k.max(1);
         let split = cx.split.at(x);
         let mut l = split.estimate(cx.scene, &cx.shading, &cx.vpls, x, k, rng, rays);
         for d in 0..k {
@@ -368,12 +387,14 @@ impl ImportanceCache {
     }
 
     /// A sample's light without caches: its emission plus, with `sampling` `Cache`, the exact sum over every
-    /// VPL (the reference), else the baseline that draws VPLs that way.
+    /// VPL (the reference), else the baseline that draws `k` VPLs that way.
+    #[allow(clippy::too_many_arguments)]
     fn without_caches(
         &self,
         cx: &Lit<'_>,
         s: &ShadingPoint,
         sampling: Sampling,
+        k: u32,
         rng: &mut Rng,
         stratum: Stratum,
         rays: &mut RayCounters,
@@ -383,7 +404,7 @@ impl ImportanceCache {
         if let Some(x) = cx.receiver(s) {
             l += match sampling {
                 Sampling::Cache => (0..cx.vpls.len()).map(|j| cx.contribution(j, &x, rays)).sum(),
-                _ => self.baseline(cx, &x, sampling, rng, stratum, rays),
+                _ => self.baseline(cx, &x, sampling, k, rng, stratum, rays),
             };
             l += compensation::clamp_loss(cx, &x, self.compensate, self.max_depth, &start, rays);
         }
@@ -677,12 +698,12 @@ impl Application for ImportanceCache {
         stratum: Stratum,
         rays: &mut RayCounters,
     ) -> [f32; 3] {
-        self.without_caches(cx, s, self.sampling, rng, stratum, rays)
+        self.without_caches(cx, s, self.sampling, self.baseline_draws(), rng, stratum, rays)
     }
 
     /// Where no cache serves a sample (a point seen in a mirror or through glass, away from every cache):
-    /// power sampling with as many draws as the techniques make, which is unbiased for the same VPL sum,
-    /// rather than the reference's exact sum over every VPL.
+    /// power sampling with [`ImportanceCache::fallback_draws`] draws, which is unbiased for the same VPL
+    /// sum, rather than the reference's exact sum over every VPL.
     fn estimate(
         &self,
         cx: &Lit<'_>,
@@ -691,7 +712,7 @@ impl Application for ImportanceCache {
         stratum: Stratum,
         rays: &mut RayCounters,
     ) -> [f32; 3] {
-        self.without_caches(cx, s, Sampling::Power, rng, stratum, rays)
+        self.without_caches(cx, s, Sampling::Power, self.fallback_draws(), rng, stratum, rays)
     }
 
     fn record_bytes(&self, record: &ImportanceRecord) -> usize {
@@ -731,6 +752,7 @@ mod tests {
             mis: Mis::Balance,
             sampling: Sampling::Cache,
             draws: 0,
+            fallback_draws: 0,
             split_cone: 10.0,
             split_near: 1.0,
             vis_angle: 10.0,
@@ -747,6 +769,17 @@ mod tests {
         let app = app([1, 1, 1, 1, 0]);
         let total = 25_000 * app.record_bytes_bound();
         assert!(total <= 1_000_000_000, "{total}");
+    }
+
+    #[test]
+    fn a_vertex_no_cache_serves_draws_four_times_a_baseline_sample_unless_told() {
+        let mut eight = app([8, 8, 8, 8, 8]);
+        // F, U, B and C draw 32 together (G only at some points): the fallback draws 128.
+        assert_eq!((eight.baseline_draws(), eight.fallback_draws()), (32, 128));
+        eight.draws = 10;
+        assert_eq!(eight.fallback_draws(), 40);
+        eight.fallback_draws = 7;
+        assert_eq!((eight.baseline_draws(), eight.fallback_draws()), (10, 7));
     }
 
     #[test]

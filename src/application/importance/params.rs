@@ -80,6 +80,13 @@ pub const DRAWS: ParamDef<i64> = ParamDef::int(
     "VPLs the uniform and power baselines draw per sample (0: as many as f, u, b and c draw together)",
 )
 .between(0, 1 << 20);
+/// `fallbackdraws`: VPLs drawn by flux at a vertex no cache serves.
+pub const FALLBACKDRAWS: ParamDef<i64> = ParamDef::int(
+    "fallbackdraws",
+    0,
+    "VPLs drawn by flux at a vertex seen after a specular bounce that no cache serves (0: four times draws)",
+)
+.between(0, 1 << 20);
 /// `splitcone`.
 pub const SPLITCONE: ParamDef<f64> = ParamDef::float(
     "splitcone",
@@ -158,6 +165,7 @@ pub const PARAMETERS: &[Parameter] = &[
     MIS.row,
     SAMPLING.row,
     DRAWS.row,
+    FALLBACKDRAWS.row,
     SPLITCONE.row,
     SPLITNEAR.row,
     VISANGLE.row,
@@ -194,6 +202,7 @@ impl ImportanceCache {
             split_cone: split_cone as f32,
             split_near: split_near as f32,
             draws: draws as u32,
+            fallback_draws: p.get(&FALLBACKDRAWS)? as u32,
             vpls: vpls as usize,
             max_depth: max_depth as u32,
             vpl_seed: p.get(&VPLSEED)? as u64,
@@ -221,6 +230,7 @@ impl ImportanceCache {
             ("mis", if self.mis == Mis::Balance { "balance" } else { "alphamax" }.into()),
             ("sampling", self.sampling.name().into()),
             ("draws", self.baseline_draws().into()),
+            ("fallbackdraws", self.fallback_draws().into()),
             ("splitcone", number(self.split_cone)),
             ("splitnear", number(self.split_near)),
             ("visangle", number(self.vis_angle)),
