@@ -743,7 +743,8 @@ fn a_wall_seen_only_in_a_mirror_is_shaded_by_the_fallback_draws_without_bias() {
     assert_eq!(default.image.pixels, four.image.pixels);
     assert!(four.rays.shadow > once.rays.shadow, "{:?} {:?}", four.rays, once.rays);
     assert_ne!(four.image.pixels, once.image.pixels);
-    // Unbiased for the same VPL sum, with the default draws and with few.
+    // Unbiased for the same VPL sum, with the default draws and with few (each pair's second setting restates
+    // the default `mis`: the helper takes two settings per case).
     let r = reference(&loaded, &base);
     assert_each_unbiased(
         &loaded,
