@@ -50,6 +50,11 @@ fn image(loaded: &LoadedScene, set: &[(&str, &str)], seed: u64) -> Image {
     render_with(loaded, set, seed, None).unwrap_or_else(|e| panic!("{set:?}: {e}")).image
 }
 
+/// The end of the test scenes lit from above: a 1×1 downward-facing area lamp at height 2.8, then `WorldEnd`.
+const LAMP: &str = "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [6 6 6]\n\
+     Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-0.5 2.8 -0.5  0.5 2.8 -0.5  0.5 2.8 0.5  -0.5 2.8 0.5]\n\
+     AttributeEnd\nWorldEnd\n";
+
 /// A floor and a back wall under a downward-facing square lamp, nothing between them: every VPL that
 /// can light a point of the floor can light every point of the floor (and the same for the wall), so each
 /// technique alone covers the light it must estimate.
@@ -60,9 +65,7 @@ fn open_corner(res: u32) -> String {
          WorldBegin\nMaterial \"matte\" \"rgb Kd\" [0.6 0.5 0.4]\n\
          Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-2 0 -2  2 0 -2  2 0 2  -2 0 2]\n\
          Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-2 0 2  2 0 2  2 3 2  -2 3 2]\n\
-         AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [6 6 6]\n\
-         Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-0.5 2.8 -0.5  0.5 2.8 -0.5  0.5 2.8 0.5  -0.5 2.8 0.5]\n\
-         AttributeEnd\nWorldEnd\n"
+         {LAMP}"
     )
 }
 
@@ -94,9 +97,7 @@ fn mirror_and_a_wall_behind(res: u32) -> String {
          Shape \"trianglemesh\" \"integer indices\" [0 2 1 0 3 2] \"point P\" [-4 0 -3  4 0 -3  4 3 -3  -4 3 -3]\n\
          Material \"mirror\"\n\
          Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-4 0.5 2  4 0.5 2  4 3 2  -4 3 2]\n\
-         AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [6 6 6]\n\
-         Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-0.5 2.8 -0.5  0.5 2.8 -0.5  0.5 2.8 0.5  -0.5 2.8 0.5]\n\
-         AttributeEnd\nWorldEnd\n"
+         {LAMP}"
     )
 }
 
@@ -176,9 +177,7 @@ fn metal_floor(res: u32, roughness: f32) -> String {
          AttributeBegin\nMaterial \"metal\" \"float roughness\" {roughness} \"bool remaproughness\" \"false\"\n\
          Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-2 0 -2  2 0 -2  2 0 2  -2 0 2]\n\
          AttributeEnd\n\
-         AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [6 6 6]\n\
-         Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-0.5 2.8 -0.5  0.5 2.8 -0.5  0.5 2.8 0.5  -0.5 2.8 0.5]\n\
-         AttributeEnd\nWorldEnd\n"
+         {LAMP}"
     )
 }
 
