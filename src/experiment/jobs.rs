@@ -190,8 +190,29 @@ fn run_one(job: &Job, out: &Path, threads: Option<usize>) -> std::result::Result
     result
 }
 
+/// The order [`run`] renders `jobs` in: first those whose time no table compares (the references and the
+/// converged per-pixel image), then the timed ones with the per-pixel runs spread evenly among the cache runs
+/// (each list keeps its own order). The equal-time tables compare seconds measured minutes apart, and the
+/// speed of a shared host drifts over minutes (one baseline took 10.7, 12.7 and 14.3 s in three sweeps of
+/// `experiments/results/imc-equal-time-sibenik-M-2026-11-30/`); interleaved, both sides of a comparison meet
+/// the same drift instead of the per-pixel runs all meeting the start of the sweep and the caches its end.
+fn in_run_order(jobs: Vec<&Job>) -> Vec<&Job> {
+    let untimed = |j: &Job| j.is_reference() || j.baseline == Some(BaselineRun::Converged);
+    let per_pixel = |j: &Job| j.baseline.is_some() || j.samples.is_some();
+    let (first, timed): (Vec<&Job>, Vec<&Job>) = jobs.into_iter().partition(|j| untimed(j));
+    let (pixels, caches): (Vec<&Job>, Vec<&Job>) = timed.into_iter().partition(|j| per_pixel(j));
+    // Item i of a list of n sits at (i + ½) / n of the run: with integers, (2i + 1) · other_len over 2 · n · other_len.
+    let (np, nc) = (pixels.len().max(1), caches.len().max(1));
+    let mut woven: Vec<(usize, u8, &Job)> =
+        pixels.into_iter().enumerate().map(|(i, j)| ((2 * i + 1) * nc, 0, j)).collect();
+    woven.extend(caches.into_iter().enumerate().map(|(i, j)| ((2 * i + 1) * np, 1, j)));
+    woven.sort_by_key(|&(at, side, _)| (at, side));
+    first.into_iter().chain(woven.into_iter().map(|(_, _, j)| j)).collect()
+}
+
 /// Runs every job of `spec` not yet done in `out` (holding the folder's lock, with a progress bar over the
-/// whole sweep on a terminal), then [`collect`]s. `log` gets one line per job.
+/// whole sweep on a terminal), then [`collect`]s. `log` gets one line per job, in the order of
+/// [`in_run_order`].
 pub fn run(
     spec: &Spec,
     out: &Path,
@@ -199,7 +220,7 @@ pub fn run(
     log: &mut dyn FnMut(&str),
 ) -> Result<(Vec<Record>, String)> {
     let _lock = lock(out)?;
-    let todo: Vec<&Job> = spec.jobs.iter().filter(|j| !done(j, out)).collect();
+    let todo = in_run_order(spec.jobs.iter().filter(|j| !done(j, out)).collect());
     log(&format!("{} jobs, {} done, {} to run", spec.jobs.len(), spec.jobs.len() - todo.len(), todo.len()));
     let bar = if std::io::stderr().is_terminal() {
         indicatif::ProgressBar::new(todo.len() as u64)
@@ -468,6 +489,50 @@ mod tests {
         assert_eq!(quote("a b"), "'a b'");
         assert_eq!(quote("it's"), "'it'\\''s'");
         assert_eq!(quote(""), "''");
+    }
+
+    fn job(id: &str, reference: &str, samples: Option<u32>, baseline: Option<BaselineRun>) -> Job {
+        Job {
+            id: id.into(),
+            scene: "s".into(),
+            file: PathBuf::from("s.pbrt"),
+            application: "importancecache".into(),
+            placement: if reference == id || samples.is_some() || baseline.is_some() { "none" } else { "vgc+dgs" }
+                .into(),
+            caches: 1,
+            seed: 0,
+            resolution: None,
+            set: Vec::new(),
+            varied: String::new(),
+            reference: reference.into(),
+            samples,
+            baseline,
+        }
+    }
+
+    #[test]
+    fn the_references_run_first_and_the_per_pixel_runs_spread_among_the_cache_runs() {
+        let mut jobs = vec![job("ref", "ref", None, None), job("conv", "ref", None, Some(BaselineRun::Converged))];
+        jobs.extend([4, 16, 64, 256].map(|n| job(&format!("bl{n}"), "ref", None, Some(BaselineRun::Rays(n)))));
+        jobs.extend((0..9).map(|k| job(&format!("c{k}"), "ref", None, None)));
+        jobs.push(job("pp8", "ref", Some(8), None));
+        // The reference swapped with a baseline, an order a sweep's spec would not give: the order comes from
+        // the kinds, each kind keeping its order in the list.
+        jobs.swap(0, 5);
+        let order: Vec<&str> = in_run_order(jobs.iter().collect()).iter().map(|j| j.id.as_str()).collect();
+        assert_eq!(order[..2], ["conv", "ref"]);
+        assert_eq!(order.len(), jobs.len());
+        // Five per-pixel runs among nine cache runs: never two in a row, the first after at most one cache run,
+        // the last before at most one.
+        let timed = &order[2..];
+        let pixel = |id: &&str| id.starts_with("bl") || id.starts_with("pp");
+        assert!(timed.windows(2).all(|w| !(pixel(&w[0]) && pixel(&w[1]))), "{timed:?}");
+        assert!(pixel(&timed[0]) || pixel(&timed[1]), "{timed:?}");
+        assert!(pixel(&timed[timed.len() - 1]) || pixel(&timed[timed.len() - 2]), "{timed:?}");
+        let pixels: Vec<&str> = timed.iter().copied().filter(pixel).collect();
+        assert_eq!(pixels, ["bl256", "bl4", "bl16", "bl64", "pp8"]);
+        let caches: Vec<&str> = timed.iter().copied().filter(|id| !pixel(id)).collect();
+        assert_eq!(caches, (0..9).map(|k| format!("c{k}")).collect::<Vec<_>>());
     }
 
     #[test]
