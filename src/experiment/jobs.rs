@@ -496,7 +496,7 @@ mod tests {
             id: id.into(),
             scene: "s".into(),
             file: PathBuf::from("s.pbrt"),
-            application: "importancecache".into(),
+            application: "an-application".into(),
             placement: if reference == id || samples.is_some() || baseline.is_some() { "none" } else { "vgc+dgs" }
                 .into(),
             caches: 1,
